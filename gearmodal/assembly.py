@@ -1,0 +1,304 @@
+"""Model -> matrices: mass, damping, stiffness per contact state, gyroscopic and centripetal
+matrices, contact gap functions as linear maps of the state, and load maps.
+
+The equations of motion at input speed ``Omega`` (rad/s) in contact state ``s`` are (DESIGN 2.1)::
+
+    M q'' + (C + C_s + Omega G) q' + (K + K_s + Omega^2 K_cent) q = B u + f_s + Omega^2 f_cent
+
+Every contact (a flank of a mesh, one side of a bearing dead band) ``e`` has a penetration
+``p_e = W[e] @ q - offset[e]`` and is active while ``p_e > 0``; then it pushes back with
+``stiffness[e] * p_e + damping[e] * p_e'`` along ``-W[e]`` (DESIGN 2.2, 2.3), so::
+
+    K_s = sum_active k_e W_e^T W_e,  C_s = sum_active c_e W_e^T W_e,  f_s = sum_active k_e offset_e W_e
+
+The kernels used here are generated from ``symbolic/`` (floating-frame wheel: ``wheel.py``;
+flank gaps: ``mesh.py``; joint/bearing deflections: ``joint.py``). Coefficients that rotate with a
+frame against fixed supports are frozen at the input azimuth given to :func:`assemble`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .errors import ModelError
+from .kernels.joint import joint_gradients
+from .kernels.mesh import mesh_gap_jacobian
+from .kernels.wheel import (
+    wheel_centrifugal_force,
+    wheel_centripetal,
+    wheel_gyroscopic,
+    wheel_mass,
+)
+from .model.components import DIRECTIONS, Gear
+from .model.model import GROUND, Model
+
+
+@dataclass
+class Contacts:
+    """The unilateral contacts of a model, one row each.
+
+    ``element`` is the mesh or bearing name, ``contact`` the flank (``front``/``back``) or bearing
+    side (``x+``, ``x-``, ...), ``kind`` is ``mesh`` or ``bearing``. ``W`` (n_contacts x n_dofs)
+    maps the state to the deflection; ``offset`` is the backlash or clearance (m or rad).
+    """
+
+    element: list[str] = field(default_factory=list)
+    contact: list[str] = field(default_factory=list)
+    kind: list[str] = field(default_factory=list)
+    W: np.ndarray = None
+    offset: np.ndarray = None
+    stiffness: np.ndarray = None
+    damping: np.ndarray = None
+    nominal: np.ndarray = None
+
+    def __len__(self) -> int:
+        return len(self.element)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per contact: element, contact, kind, offset_m, stiffness, damping, nominal."""
+        return pd.DataFrame({"element": self.element, "contact": self.contact,
+                             "kind": self.kind, "offset_m": self.offset,
+                             "stiffness": self.stiffness, "damping": self.damping,
+                             "nominal": self.nominal})
+
+
+@dataclass
+class Assembly:
+    """Assembled matrices of a model (SI units; speed in rad/s of the input body).
+
+    Attributes
+    ----------
+    dof_names, load_names : names of the state and load vectors.
+    M : mass matrix. C, K : damping and stiffness of the always-active elements.
+    G : gyroscopic matrix per rad/s of input speed (skew-symmetric).
+    K_cent : centripetal stiffness per (rad/s)^2 (softening, negative semi-definite).
+    f_cent : centrifugal force per (rad/s)^2.
+    B : load map, generalised force = ``B @ u`` for the load values ``u`` (N, N m).
+    contacts : the unilateral contacts (:class:`Contacts`).
+    """
+
+    dof_names: list[str]
+    load_names: list[str]
+    M: np.ndarray
+    C: np.ndarray
+    K: np.ndarray
+    G: np.ndarray
+    K_cent: np.ndarray
+    f_cent: np.ndarray
+    B: np.ndarray
+    contacts: Contacts
+    azimuth: float = 0.0
+    body_slices: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return len(self.dof_names)
+
+    def state(self, state=None) -> np.ndarray:
+        """A boolean contact-state vector; ``None`` gives the nominal state (front flanks in
+        contact, back flanks open, bearing clearances taken up on their + side)."""
+        if state is None:
+            return self.contacts.nominal.copy()
+        s = np.asarray(state, dtype=bool)
+        if s.shape != (len(self.contacts),):
+            raise ModelError("state", f"expected {len(self.contacts)} booleans, got shape {s.shape}")
+        return s
+
+    def stiffness(self, state=None, speed: float = 0.0) -> np.ndarray:
+        """``K + K_s + speed^2 K_cent`` for contact state ``state``; speed in rad/s."""
+        s = self.state(state)
+        W = self.contacts.W[s]
+        return self.K + (W.T * self.contacts.stiffness[s]) @ W + speed**2 * self.K_cent
+
+    def damping(self, state=None, speed: float = 0.0) -> np.ndarray:
+        """``C + C_s + speed G`` for contact state ``state``; speed in rad/s."""
+        s = self.state(state)
+        W = self.contacts.W[s]
+        return self.C + (W.T * self.contacts.damping[s]) @ W + speed * self.G
+
+    def contact_force(self, state=None) -> np.ndarray:
+        """``f_s = sum_active k_e offset_e W_e``: the constant part of the contact forces."""
+        s = self.state(state)
+        return self.contacts.W[s].T @ (self.contacts.stiffness[s] * self.contacts.offset[s])
+
+    def penetration(self, q: np.ndarray) -> np.ndarray:
+        """Penetration of every contact, ``W q - offset`` (active where > 0)."""
+        return self.contacts.W @ q - self.contacts.offset
+
+    def load_vector(self, loads: dict | None) -> np.ndarray:
+        """Generalised force ``B u`` for a mapping ``{load name: value}`` (N, N m)."""
+        f = np.zeros(self.n)
+        for key, value in (loads or {}).items():
+            try:
+                j = self.load_names.index(key)
+            except ValueError:
+                raise ModelError(f"loads.{key}", "no such load; available: "
+                                 + ", ".join(self.load_names)) from None
+            f += self.B[:, j] * float(value)
+        return f
+
+
+def _rz(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _body_transform(model: Model, body, azimuth: float) -> np.ndarray:
+    """T (6 x n_b): global (ux, uy, uz, rx, ry, rz) of the body centre from its coordinates.
+
+    The local axes are ``Rz(frame angle + orientation)``; a scaled rotation ``u = r theta``
+    contributes ``1/r`` to theta.
+    """
+    frame = model.frames[body.frame]
+    R = _rz(frame.speed_ratio * azimuth + body.orientation)
+    R6 = np.zeros((6, 6))
+    R6[:3, :3] = R
+    R6[3:, 3:] = R
+    T = R6[:, list(body.local_indices)].copy()
+    if body.rotation_scale is not None:
+        T[:, -1] /= body.rotation_scale
+    return T
+
+
+def _body_selector(body) -> np.ndarray:
+    """S (6 x n_b): local 6-vector from the body's coordinates (with the rotation scale)."""
+    S = np.eye(6)[:, list(body.local_indices)].copy()
+    if body.rotation_scale is not None:
+        S[:, -1] /= body.rotation_scale
+    return S
+
+
+def _centre(model: Model, body, azimuth: float) -> np.ndarray:
+    frame = model.frames[body.frame]
+    return _rz(frame.speed_ratio * azimuth) @ np.asarray(body.position, dtype=float)
+
+
+def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
+    """Assemble ``model`` at input azimuth ``azimuth`` (rad; geometry of frames turning against
+    each other is frozen there). Returns an :class:`Assembly`.
+    """
+    model.check()
+    bodies = list(model.bodies.values())
+    slices, start = {}, 0
+    for b in bodies:
+        nb = len(b.local_indices)
+        slices[b.name] = slice(start, start + nb)
+        start += nb
+    n = start
+    M = np.zeros((n, n))
+    G = np.zeros((n, n))
+    Kc = np.zeros((n, n))
+    fc = np.zeros(n)
+    T = {b.name: _body_transform(model, b, azimuth) for b in bodies}
+    centres = {b.name: _centre(model, b, azimuth) for b in bodies}
+
+    # Inertia of each wheel: the local block of the floating-frame kernels (DESIGN 2.1).
+    for b in bodies:
+        sl = slices[b.name]
+        S = _body_selector(b)
+        args = (b.mass, b.inertia_diametral, b.inertia, *b.position, b.orientation)
+        of = model.frames[b.frame].speed_ratio
+        M[sl, sl] = S.T @ wheel_mass(*args)[6:, 6:] @ S
+        G[sl, sl] = S.T @ wheel_gyroscopic(*args, of, b.speed_ratio)[6:, 6:] @ S
+        Kc[sl, sl] = S.T @ wheel_centripetal(*args, of, b.speed_ratio)[6:, 6:] @ S
+        fc[sl] = S.T @ wheel_centrifugal_force(*args, of, b.speed_ratio)[6:]
+
+    K = np.zeros((n, n))
+    C = np.zeros((n, n))
+    rows, offs, ks, cs, noms, elems, labels, kinds = [], [], [], [], [], [], [], []
+
+    def add_contact(w, off, k, c, nominal, elem, label, kind):
+        rows.append(w)
+        offs.append(off)
+        ks.append(k)
+        cs.append(c)
+        noms.append(nominal)
+        elems.append(elem)
+        labels.append(label)
+        kinds.append(kind)
+
+    # Meshes: two flanks on mirrored lines of action (DESIGN 2.2).
+    for m in model.meshes.values():
+        a, b = model.bodies[m.gear_a], model.bodies[m.gear_b]
+        if m.internal is not None:
+            internal = 1.0 if m.internal else 0.0
+        else:
+            internal = 1.0 if isinstance(a, Gear) and a.internal else 0.0
+        if m.base_radii is not None:
+            rba, rbb = (float(r) for r in m.base_radii)
+        else:
+            rba, rbb = a.base_radius, b.base_radius
+        if m.pressure_angle is not None:
+            alpha = m.pressure_angle
+        else:
+            alpha = b.transverse_pressure_angle if isinstance(b, Gear) else a.transverse_pressure_angle
+        if m.helix_angle is not None:
+            beta_b = m.helix_angle
+        else:
+            beta_b = a.base_helix_angle if isinstance(a, Gear) else 0.0
+        ca, cb = centres[a.name], centres[b.name]
+        if np.hypot(*(cb - ca)[:2]) == 0.0:
+            raise ModelError(m.name, f"gears {a.name!r} and {b.name!r} have the same centre")
+        for flank, side, off in (("front", m.side, 0.0), ("back", -m.side, m.backlash)):
+            J = mesh_gap_jacobian(ca[0], ca[1], cb[0], cb[1], rba, rbb, alpha, beta_b,
+                                  float(side), internal)
+            w = np.zeros(n)
+            w[slices[a.name]] += J[:6] @ T[a.name]
+            w[slices[b.name]] += J[6:] @ T[b.name]
+            if np.any(w):
+                add_contact(w, off, m.stiffness, m.damping, flank == "front", m.name, flank,
+                            "mesh")
+
+    # Bearings, supports and shafts with per-direction dead bands (DESIGN 2.3).
+    for br in model.bearings.values():
+        a = model.bodies[br.a]
+        b = model.bodies[br.b] if br.b is not None else None
+        fa = model.frames[a.frame]
+        pa = _rz(fa.speed_ratio * azimuth) @ np.asarray(br.at, dtype=float)
+        cb = centres[b.name] if b is not None else np.zeros(3)
+        pb = centres[a.name] + pa - cb
+        axes_frame = br.axes_frame or (b.frame if b is not None else GROUND)
+        gamma = model.frames[axes_frame].speed_ratio * azimuth + br.axes_angle
+        Ga, Gb = joint_gradients(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2], gamma)
+        for key, k in br.stiffness.items():
+            i = DIRECTIONS.index(key)
+            w = np.zeros(n)
+            w[slices[a.name]] += Ga[i] @ T[a.name]
+            if b is not None:
+                w[slices[b.name]] += Gb[i] @ T[b.name]
+            if not np.any(w):
+                continue  # the direction acts on no DOF present at these levels
+            c = br.damping.get(key, 0.0)
+            gap = br.clearance.get(key, 0.0)
+            if gap == 0.0:
+                K += k * np.outer(w, w)
+                C += c * np.outer(w, w)
+            else:
+                add_contact(w, gap, k, c, True, br.name, f"{key}+", "bearing")
+                add_contact(-w, gap, k, c, False, br.name, f"{key}-", "bearing")
+
+    # Loads by name: generalised force of a unit force/moment at the body centre.
+    load_names, cols = [], []
+    for b in bodies:
+        for lname, idx in model.load_directions(b):
+            col = np.zeros(n)
+            col[slices[b.name]] = T[b.name][idx]
+            if lname.endswith(".force_u"):
+                col[slices[b.name]] *= b.rotation_scale
+            load_names.append(lname)
+            cols.append(col)
+    B = np.array(cols).T if cols else np.zeros((n, 0))
+
+    nc = len(rows)
+    contacts = Contacts(
+        element=elems, contact=labels, kind=kinds,
+        W=np.array(rows) if nc else np.zeros((0, n)),
+        offset=np.array(offs, dtype=float), stiffness=np.array(ks, dtype=float),
+        damping=np.array(cs, dtype=float), nominal=np.array(noms, dtype=bool))
+    return Assembly(dof_names=model.dof_names, load_names=load_names, M=M, C=C, K=K, G=G,
+                    K_cent=Kc, f_cent=fc, B=B, contacts=contacts, azimuth=azimuth,
+                    body_slices=slices)

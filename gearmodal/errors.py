@@ -1,0 +1,15 @@
+"""Errors raised by gearmodal.
+
+Every input error names the offending field, the value given and what is allowed, so that the
+CLI can print it without a traceback (``gearmodal`` exits with status 2 on a ``ModelError``).
+"""
+
+from __future__ import annotations
+
+
+class ModelError(ValueError):
+    """Invalid model input: the message names the field, the value and the allowed range."""
+
+    def __init__(self, field: str, message: str):
+        self.field = field
+        super().__init__(f"{field}: {message}" if field else message)

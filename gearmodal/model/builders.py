@@ -1,0 +1,440 @@
+"""Builders: gear pairs, planetary and parallel stages, Lin & Parker stages, drivetrains.
+
+Sign convention (all builders): every rotation is positive counter-clockwise about +z; ``q = 0``
+is the front flanks touching with zero force, and a positive torque on the driving member (the
+pinion of a pair, the carrier of a planetary stage, the input of a drivetrain) closes the front
+flanks. Back flanks touch when the relative rotation, measured along their line of action,
+exceeds the backlash.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+from ..errors import ModelError
+from . import validate as v
+from .components import DOF_LEVELS, Bearing, Frame, Gear, Mesh, RigidBody, Shaft
+from .model import GROUND, Model
+
+_CENTRAL = ("carrier", "ring", "sun")
+
+
+def _gear(g: Gear, field: str, name: str, dofs: str) -> Gear:
+    if not isinstance(g, Gear):
+        raise ModelError(field, f"expected a gm.Gear, got {type(g).__name__}")
+    out = copy.deepcopy(g)
+    out.name = name
+    out.dofs = dofs
+    out.coordinate_names = dict(g.coordinate_names)
+    return out
+
+
+def _same_tooth_system(field: str, a: Gear, b: Gear) -> None:
+    if not math.isclose(a.module, b.module, rel_tol=1e-12):
+        raise ModelError(field, f"modules differ ({a.name}: {a.module:g} m, {b.name}: "
+                                f"{b.module:g} m); meshing gears need the same module")
+    if not math.isclose(a.pressure_angle, b.pressure_angle, rel_tol=1e-12):
+        raise ModelError(field, f"pressure angles differ ({a.pressure_angle:g} rad vs "
+                                f"{b.pressure_angle:g} rad)")
+    if not math.isclose(abs(a.helix_angle), abs(b.helix_angle), rel_tol=1e-12, abs_tol=1e-15):
+        raise ModelError(field, f"helix angles differ in size ({a.helix_angle:g} rad vs "
+                                f"{b.helix_angle:g} rad)")
+
+
+def _support(field: str, spec, dofs: str) -> dict:
+    """Normalise a bearing spec: a number (translational stiffness, N/m) or a table with
+    ``stiffness``, ``damping``, ``clearance`` tables keyed by direction."""
+    if spec is None:
+        return {"stiffness": {}, "damping": {}, "clearance": {}}
+    if not isinstance(spec, dict):
+        k = v.nonnegative(field, spec, "N/m")
+        keys = ("x", "y", "z") if dofs == "full" else ("x", "y")
+        return {"stiffness": dict.fromkeys(keys, k), "damping": {}, "clearance": {}}
+    unknown = set(spec) - {"stiffness", "damping", "clearance"}
+    if unknown:
+        raise ModelError(f"{field}.{sorted(unknown)[0]}", "unknown key; allowed: stiffness, "
+                                                          "damping, clearance")
+    return {"stiffness": dict(spec.get("stiffness", {})), "damping": dict(spec.get("damping", {})),
+            "clearance": dict(spec.get("clearance", {}))}
+
+
+def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
+              mesh_damping: float = 0.0, dofs: str = "torsional",
+              bearing_stiffness=None) -> Model:
+    """Two external gears on fixed bearings, free to rotate.
+
+    Parameters
+    ----------
+    pinion, wheel : :class:`Gear` (same module and pressure angle, opposite helix hands).
+    mesh_stiffness : N/m along the line of action. backlash : m along the line of action.
+    mesh_damping : N s/m.
+    dofs : DOF level of both wheels. At ``planar``/``full`` the wheels float on bearings of
+        ``bearing_stiffness`` (N/m, or a table as for :class:`Bearing`) to the ground.
+
+    DOFs are ``"pinion.theta"``, ``"wheel.theta"`` (plus ``.x``, ``.y``...); loads
+    ``"pinion.torque"``, ``"wheel.torque"`` (N m). The pinion is the input and sits at the
+    origin, the wheel on +x at the standard centre distance. A positive pinion torque closes the
+    front flank.
+
+    Examples
+    --------
+    >>> import math, gearmodal as gm
+    >>> p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
+    >>> w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
+    >>> gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4).dof_names
+    ['pinion.theta', 'wheel.theta']
+    """
+    v.choice("gear_pair.dofs", dofs, DOF_LEVELS)
+    p = _gear(pinion, "gear_pair.pinion", "pinion", dofs)
+    w = _gear(wheel, "gear_pair.wheel", "wheel", dofs)
+    if p.internal or w.internal:
+        raise ModelError("gear_pair", "both gears of a gear_pair must be external")
+    _same_tooth_system("gear_pair.wheel", p, w)
+    centre = (p.base_radius + w.base_radius) / math.cos(p.transverse_pressure_angle)
+    p.position, p.speed_ratio = (0.0, 0.0, 0.0), 1.0
+    w.position, w.speed_ratio = (centre, 0.0, 0.0), -p.teeth / w.teeth
+    m = Model("gear_pair", input="pinion")
+    m.add(p)
+    m.add(w)
+    m.add(Mesh("mesh", "pinion", "wheel", mesh_stiffness, backlash, mesh_damping, side=1))
+    if dofs != "torsional":
+        if bearing_stiffness is None:
+            raise ModelError("gear_pair.bearing_stiffness", f"required for dofs={dofs!r} "
+                             "(N/m): the wheels' centres need a support")
+        for g in ("pinion", "wheel"):
+            s = _support("gear_pair.bearing_stiffness", bearing_stiffness, dofs)
+            m.add(Bearing(f"{g}_bearing", g, None, **s))
+    return m
+
+
+def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing: dict,
+                     torsional: dict, mesh: dict, pressure_angle, planet_angles=None, *,
+                     backlash: float = 0.0, mesh_damping: float = 0.0) -> Model:
+    """Lin & Parker (1999) planar planetary stage in the frame rotating with the carrier.
+
+    Parameters (SI, Lin & Parker's convention)
+    ----------
+    n_planets : number of planets (>= 1).
+    mass : kg, keyed ``carrier``, ``ring``, ``sun``, ``planet``.
+    inertia_over_r2 : ``I / r**2`` in kg, same keys (``r`` is the base radius; the carrier's is
+        the radius of the planet pins).
+    bearing : translational support stiffness of ``carrier``, ``ring``, ``sun`` (to ground) and
+        ``planet`` (planet bearing, radial and tangential), N/m.
+    torsional : torsional support stiffness of ``carrier``, ``ring``, ``sun`` in N/m acting on
+        ``u = r theta``.
+    mesh : mesh stiffness ``sun_planet``, ``ring_planet``, N/m.
+    pressure_angle : rad, a number or a table ``sun_planet``, ``ring_planet``.
+    planet_angles : planet positions ``psi_n`` in rad (default equally spaced from 0).
+    backlash : m, both meshes (the back flanks; 0 = none). mesh_damping : N s/m.
+
+    DOFs are ``carrier.x, carrier.y, carrier.u, ring.x, ..., sun.u, planet1.zeta, planet1.eta,
+    planet1.u, ...`` with ``zeta``/``eta`` the planet's radial/tangential displacement and ``u``
+    the rotational coordinate ``r theta`` (m). Front flanks follow Lin & Parker's mesh
+    deflections ``delta_sn``, ``delta_rn`` (compressed by a positive sun rotation).
+    """
+    n_planets = v.integer("lin_parker_stage.n_planets", n_planets, minimum=1)
+    for label, table, keys in (("mass", mass, (*_CENTRAL, "planet")),
+                               ("inertia_over_r2", inertia_over_r2, (*_CENTRAL, "planet")),
+                               ("bearing", bearing, (*_CENTRAL, "planet")),
+                               ("torsional", torsional, _CENTRAL),
+                               ("mesh", mesh, ("sun_planet", "ring_planet"))):
+        if not isinstance(table, dict):
+            raise ModelError(f"lin_parker_stage.{label}", f"expected a table with keys "
+                                                          f"{', '.join(keys)}, got {table!r}")
+        for k in keys:
+            if k not in table:
+                raise ModelError(f"lin_parker_stage.{label}.{k}", "missing")
+        for k in table:
+            if k not in keys:
+                raise ModelError(f"lin_parker_stage.{label}.{k}", "unknown key; allowed: "
+                                 + ", ".join(keys))
+    if isinstance(pressure_angle, dict):
+        a_s = pressure_angle.get("sun_planet")
+        a_r = pressure_angle.get("ring_planet")
+    else:
+        a_s = a_r = pressure_angle
+    a_s = v.angle("lin_parker_stage.pressure_angle.sun_planet", a_s, low=1e-6, high=math.pi / 3)
+    a_r = v.angle("lin_parker_stage.pressure_angle.ring_planet", a_r, low=1e-6,
+                  high=math.pi / 3)
+    psi = _planet_angles("lin_parker_stage.planet_angles", planet_angles, n_planets)
+
+    # Radii cancel from Lin & Parker's matrices (u = r theta, I / r^2); pick a consistent
+    # geometry: pin radius 1 m, planet base radius 1/4 m, sun and ring base radii from the
+    # pressure angles so that both lines of action are tangent to the base circles.
+    r_c, r_p = 1.0, 0.25
+    radius = {"carrier": r_c, "sun": r_c * math.cos(a_s) - r_p,
+              "ring": r_c * math.cos(a_r) + r_p, "planet": r_p}
+    m = Model("lin_parker_stage", input="carrier")
+    m.add(Frame("carrier", 1.0))
+    for b in _CENTRAL:
+        r = radius[b]
+        m.add(RigidBody(name=b, mass=mass[b], inertia=_iorr(f"{b}", inertia_over_r2[b], r),
+                        dofs="planar", frame="carrier", rotation_scale=r, speed_ratio=1.0))
+    for n, p in enumerate(psi, start=1):
+        m.add(RigidBody(name=f"planet{n}", mass=mass["planet"],
+                        inertia=_iorr("planet", inertia_over_r2["planet"], r_p),
+                        dofs="planar", frame="carrier", rotation_scale=r_p, speed_ratio=1.0,
+                        position=(r_c * math.cos(p), r_c * math.sin(p), 0.0), orientation=p,
+                        coordinate_names={"x": "zeta", "y": "eta"}))
+    for b in _CENTRAL:
+        k = v.nonnegative(f"lin_parker_stage.bearing.{b}", bearing[b], "N/m")
+        ku = v.nonnegative(f"lin_parker_stage.torsional.{b}", torsional[b], "N/m")
+        m.add(Bearing(f"{b}_support", b, None,
+                      stiffness={"x": k, "y": k, "theta": ku * radius[b] ** 2}))
+    kp = v.nonnegative("lin_parker_stage.bearing.planet", bearing["planet"], "N/m")
+    ksp = v.nonnegative("lin_parker_stage.mesh.sun_planet", mesh["sun_planet"], "N/m")
+    krp = v.nonnegative("lin_parker_stage.mesh.ring_planet", mesh["ring_planet"], "N/m")
+    for n, p in enumerate(psi, start=1):
+        pl = f"planet{n}"
+        m.add(Bearing(f"{pl}_bearing", pl, "carrier", stiffness={"x": kp, "y": kp},
+                      axes_angle=p))
+        m.add(Mesh(f"sun_{pl}", "sun", pl, ksp, backlash, mesh_damping, side=1,
+                   pressure_angle=a_s, base_radii=(radius["sun"], r_p), helix_angle=0.0,
+                   internal=False))
+        m.add(Mesh(f"ring_{pl}", "ring", pl, krp, backlash, mesh_damping, side=1,
+                   pressure_angle=a_r, base_radii=(radius["ring"], r_p), helix_angle=0.0,
+                   internal=True))
+    m.groups["planets"] = [f"planet{n}" for n in range(1, n_planets + 1)]
+    return m.check()
+
+
+def _iorr(field: str, value, r: float) -> float:
+    return v.positive(f"lin_parker_stage.inertia_over_r2.{field}", value, "kg") * r * r
+
+
+def _planet_angles(field: str, angles, n: int) -> list[float]:
+    if angles is None:
+        return [2 * math.pi * i / n for i in range(n)]
+    angles = list(angles)
+    if len(angles) != n:
+        raise ModelError(field, f"gives {len(angles)} angles for {n} planets")
+    return [v.number(f"{field}[{i}]", a, "rad") for i, a in enumerate(angles)]
+
+
+def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
+                    carrier_mass: float, carrier_inertia: float,
+                    mesh_stiffness, backlash: float = 0.0, mesh_damping: float = 0.0,
+                    planet_bearing=None, carrier_bearing=None, sun_support=None,
+                    ring_support=None, dofs: str = "planar", planet_angles=None,
+                    carrier_inertia_diametral: float | None = None,
+                    name: str = "planetary_stage") -> Model:
+    """A planetary stage with carrier input and the ring held (the wind-turbine layout).
+
+    Parameters
+    ----------
+    sun, planet, ring : :class:`Gear` (``ring.internal = True``; ring teeth = sun + 2 planet).
+    n_planets : number of planets; equally spaced unless ``planet_angles`` (rad) is given.
+    carrier_mass : kg. carrier_inertia : kg m^2 about the axis.
+    mesh_stiffness : N/m, a number or a table ``sun_planet``, ``ring_planet``.
+    backlash : m along the line of action (both meshes). mesh_damping : N s/m.
+    planet_bearing, carrier_bearing, sun_support, ring_support : N/m or a table of
+        ``stiffness``/``damping``/``clearance`` tables keyed by direction (see
+        :class:`Bearing`); the planet bearing's axes are radial/tangential, the others'
+        are fixed. Supports go to the ground (to the housing inside a drivetrain).
+    dofs : DOF level of every body.
+
+    All bodies' coordinates are expressed in the frame rotating with the carrier (Lin & Parker
+    1999). Bodies: ``carrier``, ``sun``, ``ring``, ``planet1..N`` (planet translations ``zeta``
+    radial, ``eta`` tangential). The carrier is the input (speed ratio 1), the sun turns at
+    ``1 + z_ring/z_sun``. A positive carrier torque closes the front flanks.
+    """
+    v.choice(f"{name}.dofs", dofs, DOF_LEVELS)
+    n_planets = v.integer(f"{name}.n_planets", n_planets, minimum=1)
+    s = _gear(sun, f"{name}.sun", "sun", dofs)
+    p = _gear(planet, f"{name}.planet", "planet", dofs)
+    r = _gear(ring, f"{name}.ring", "ring", dofs)
+    if not r.internal:
+        raise ModelError(f"{name}.ring.internal", "= false: the ring must be an internal gear")
+    if s.internal or p.internal:
+        raise ModelError(f"{name}.sun.internal", "sun and planet must be external gears")
+    _same_tooth_system(f"{name}.planet", s, p)
+    _same_tooth_system(f"{name}.ring", p, r)
+    if r.teeth != s.teeth + 2 * p.teeth:
+        raise ModelError(f"{name}.ring.teeth", f"= {r.teeth}: ring teeth must equal sun + 2 * "
+                         f"planet ({s.teeth} + 2 * {p.teeth} = {s.teeth + 2 * p.teeth})")
+    if planet_angles is None and (s.teeth + r.teeth) % n_planets:
+        raise ModelError(f"{name}.n_planets", f"= {n_planets}: planets cannot be equally "
+                         f"spaced, (sun + ring teeth) = {s.teeth + r.teeth} is not divisible "
+                         f"by {n_planets}; give planet_angles")
+    psi = _planet_angles(f"{name}.planet_angles", planet_angles, n_planets)
+    if isinstance(mesh_stiffness, dict):
+        k_sp = mesh_stiffness.get("sun_planet")
+        k_rp = mesh_stiffness.get("ring_planet")
+        if k_sp is None or k_rp is None:
+            raise ModelError(f"{name}.mesh_stiffness", "needs sun_planet and ring_planet")
+    else:
+        k_sp = k_rp = mesh_stiffness
+    centre = (s.base_radius + p.base_radius) / math.cos(s.transverse_pressure_angle)
+
+    m = Model(name, input="carrier")
+    m.add(Frame("carrier", 1.0))
+    carrier = RigidBody(name="carrier", mass=carrier_mass, inertia=carrier_inertia,
+                        inertia_diametral=carrier_inertia_diametral, dofs=dofs,
+                        frame="carrier", speed_ratio=1.0)
+    for g, ratio in ((s, 1.0 + r.teeth / s.teeth), (r, 0.0)):
+        g.frame, g.speed_ratio = "carrier", ratio
+    m.add(carrier)
+    m.add(s)
+    m.add(r)
+    for n, a in enumerate(psi, start=1):
+        pl = copy.deepcopy(p)
+        pl.name, pl.frame, pl.speed_ratio = f"planet{n}", "carrier", 1.0 - r.teeth / p.teeth
+        pl.position = (centre * math.cos(a), centre * math.sin(a), 0.0)
+        pl.orientation = a
+        pl.coordinate_names = {"x": "zeta", "y": "eta"}
+        m.add(pl)
+    for label, spec, body in (("carrier_bearing", carrier_bearing, "carrier"),
+                              ("sun_support", sun_support, "sun"),
+                              ("ring_support", ring_support, "ring")):
+        sup = _support(f"{name}.{label}", spec, dofs)
+        if sup["stiffness"]:
+            m.add(Bearing(label, body, None, **sup))
+    for n, a in enumerate(psi, start=1):
+        pl = f"planet{n}"
+        sup = _support(f"{name}.planet_bearing", planet_bearing, dofs)
+        if sup["stiffness"]:
+            m.add(Bearing(f"{pl}_bearing", pl, "carrier", axes_angle=a, **sup))
+        # Carrier input: the planets drive the sun and push on the ring on the flanks that a
+        # positive carrier rotation closes, i.e. Lin & Parker's mirrored line of action.
+        m.add(Mesh(f"sun_{pl}", "sun", pl, k_sp, backlash, mesh_damping, side=-1))
+        m.add(Mesh(f"ring_{pl}", "ring", pl, k_rp, backlash, mesh_damping, side=-1))
+    m.groups["planets"] = [f"planet{n}" for n in range(1, n_planets + 1)]
+    m.output = "sun"
+    return m.check()
+
+
+def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash: float = 0.0,
+                   mesh_damping: float = 0.0, gear_bearing=None, pinion_bearing=None,
+                   dofs: str = "planar", position=(0.0, 0.0), angle: float = 0.0,
+                   name: str = "parallel_stage") -> Model:
+    """A parallel (speed-increasing) stage: ``gear`` (input, the large wheel) drives ``pinion``.
+
+    ``position`` (m) is the centre of ``gear`` in the housing plane and ``angle`` (rad) the
+    direction from it to the pinion. Bearings (N/m or tables, see :class:`Bearing`) go to the
+    ground, or to the housing inside a drivetrain. A positive torque on ``gear`` closes the front
+    flank.
+    """
+    v.choice(f"{name}.dofs", dofs, DOF_LEVELS)
+    g = _gear(gear, f"{name}.gear", "gear", dofs)
+    p = _gear(pinion, f"{name}.pinion", "pinion", dofs)
+    if g.internal or p.internal:
+        raise ModelError(f"{name}", "gears of a parallel stage must be external")
+    _same_tooth_system(f"{name}.pinion", g, p)
+    angle = v.number(f"{name}.angle", angle, "rad")
+    x0, y0 = (v.number(f"{name}.position", c, "m") for c in position)
+    centre = (g.base_radius + p.base_radius) / math.cos(g.transverse_pressure_angle)
+    g.position, g.speed_ratio = (x0, y0, 0.0), 1.0
+    p.position = (x0 + centre * math.cos(angle), y0 + centre * math.sin(angle), 0.0)
+    p.speed_ratio = -g.teeth / p.teeth
+    m = Model(name, input="gear")
+    m.add(g)
+    m.add(p)
+    m.add(Mesh("mesh", "gear", "pinion", mesh_stiffness, backlash, mesh_damping, side=1))
+    for label, spec, body in (("gear_bearing", gear_bearing, "gear"),
+                              ("pinion_bearing", pinion_bearing, "pinion")):
+        sup = _support(f"{name}.{label}", spec, dofs)
+        if sup["stiffness"]:
+            m.add(Bearing(label, body, None, **sup))
+    m.output = "pinion"
+    return m.check()
+
+
+def drivetrain(rotor: RigidBody, stages: list, *, main_shaft_stiffness: float,
+               main_shaft_damping: float = 0.0, couplings=None,
+               generator: RigidBody | None = None, hss_stiffness: float | None = None,
+               hss_damping: float = 0.0, housing: RigidBody | None = None,
+               suspension=None, shaft_bending=None, name: str = "drivetrain",
+               stage_names=None) -> Model:
+    """Chain a rotor, gear stages, a generator and a housing on its suspension.
+
+    Parameters
+    ----------
+    rotor : the rotor (input, speed ratio 1), usually ``dofs="torsional"``.
+    stages : stage models from :func:`planetary_stage` / :func:`parallel_stage`, input first;
+        each stage's input is coupled to the previous stage's output and placed coaxially.
+    main_shaft_stiffness : N m/rad, rotor to first stage input. couplings : N m/rad between
+        consecutive stages (a number or a list; default rigid-ish 1e9).
+    generator, hss_stiffness : generator rotor and its coupling to the last stage, N m/rad.
+    housing : gearbox housing body (planar/full); the stages' supports attach to it, and it
+        rests on ``suspension`` (N/m or a table, see :class:`Bearing`) to the ground.
+    shaft_bending : translational support of the first stage input (the main shaft end, seen
+        through the main bearing), N/m or a table.
+
+    Stage bodies are named ``stage<k>.<body>`` (or with ``stage_names``). Speed ratios are
+    chained so that every body's ratio is relative to the rotor; a stage whose input turns
+    backwards has its mesh sides flipped so that rotor torque closes every front flank.
+    """
+    if not isinstance(rotor, RigidBody):
+        raise ModelError(f"{name}.rotor", "expected a gm.RigidBody")
+    if not stages:
+        raise ModelError(f"{name}.stages", "at least one stage is needed")
+    names = list(stage_names or [f"stage{k}" for k in range(1, len(stages) + 1)])
+    if len(names) != len(stages):
+        raise ModelError(f"{name}.stage_names", "one name per stage")
+    if couplings is None or not isinstance(couplings, (list, tuple)):
+        couplings = [couplings if couplings is not None else 1e9] * (len(stages) - 1)
+    m = Model(name, input="rotor")
+    rot = copy.deepcopy(rotor)
+    rot.name = rot.name or "rotor"
+    if rot.name != "rotor":
+        raise ModelError(f"{name}.rotor.name", "the drivetrain input body is named 'rotor'")
+    rot.speed_ratio = 1.0
+    m.add(rot)
+    support = None
+    if housing is not None:
+        h = copy.deepcopy(housing)
+        h.name = "housing"
+        h.speed_ratio = 0.0
+        m.add(h)
+        support = "housing"
+    ratio, prev_out, prev_centre = 1.0, "rotor", (0.0, 0.0)
+    for k, (sname, st) in enumerate(zip(names, stages, strict=True)):
+        if not isinstance(st, Model) or getattr(st, "output", None) is None:
+            raise ModelError(f"{name}.stages[{k}]", "expected a stage model from "
+                             "gm.planetary_stage or gm.parallel_stage")
+        st = st.copy()
+        inp = st.bodies[st.input]
+        dx, dy = prev_centre[0] - inp.position[0], prev_centre[1] - inp.position[1]
+        for b in st.bodies.values():
+            b.speed_ratio *= ratio
+            if st.frames[b.frame].speed_ratio == 0.0:
+                b.position = (b.position[0] + dx, b.position[1] + dy, b.position[2])
+            elif (dx, dy) != (0.0, 0.0):
+                raise ModelError(f"{name}.stages[{k}]", "a rotating-frame stage must be "
+                                 "coaxial with the rotor")
+        for fr in st.frames.values():
+            fr.speed_ratio *= ratio
+        if ratio < 0:
+            for mesh in st.meshes.values():
+                mesh.side = -mesh.side
+        m.merge(st, sname, ground=support)
+        a = f"{sname}.{st.input}"
+        if k == 0:
+            m.add(Shaft("main_shaft", "rotor", a, main_shaft_stiffness, main_shaft_damping))
+            if shaft_bending is not None:
+                dofs = m.bodies[a].dofs
+                m.add(Bearing("shaft_bending", a, None,
+                              **_support(f"{name}.shaft_bending", shaft_bending, dofs)))
+        else:
+            m.add(Shaft(f"coupling{k}", prev_out, a, couplings[k - 1]))
+        out = st.bodies[st.output]
+        ratio = out.speed_ratio
+        prev_out = f"{sname}.{st.output}"
+        prev_centre = out.position[:2]
+    if generator is not None:
+        g = copy.deepcopy(generator)
+        g.name = "generator"
+        g.speed_ratio = ratio
+        m.add(g)
+        if hss_stiffness is None:
+            raise ModelError(f"{name}.hss_stiffness", "required with a generator (N m/rad)")
+        m.add(Shaft("hss_shaft", prev_out, "generator", hss_stiffness, hss_damping))
+    if housing is not None:
+        if suspension is None:
+            raise ModelError(f"{name}.suspension", "required with a housing")
+        m.add(Bearing("suspension", "housing", None,
+                      **_support(f"{name}.suspension", suspension, m.bodies["housing"].dofs)))
+    m.output = "generator" if generator is not None else prev_out
+    m.gear_ratio = ratio
+    return m.check()

@@ -1,0 +1,294 @@
+"""Declarative model components: frames, bodies (gears and rigid bodies), meshes, bearings, shafts.
+
+Units are SI throughout: m, kg, kg m^2, N/m, N m/rad, N s/m, rad. Angles are in radians.
+
+Kinematics (DESIGN 2.1, paper section 4): every body sits in a reference *frame* that rotates
+about the global z axis at ``speed_ratio`` times the model's input speed. A body's small
+displacements are expressed in its local axes ``A1 = Rz(orientation)`` inside that frame; its
+DOF level picks which of the six local coordinates ``(x, y, z, rx, ry, theta)`` exist:
+
+=========== ====================================
+level        local DOF
+=========== ====================================
+torsional    theta
+planar       x, y, theta
+full         x, y, z, rx, ry, theta
+=========== ====================================
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from ..errors import ModelError
+from . import validate as v
+
+DOF_LEVELS = ("torsional", "planar", "full")
+#: local coordinates of each level, as indices into (x, y, z, rx, ry, theta)
+LEVEL_INDICES = {"torsional": (5,), "planar": (0, 1, 5), "full": (0, 1, 2, 3, 4, 5)}
+LOCAL_NAMES = ("x", "y", "z", "rx", "ry", "theta")
+DIRECTIONS = LOCAL_NAMES  # bearing directions, in the bearing axes
+
+
+@dataclass(eq=False)
+class Frame:
+    """A reference frame rotating steadily about global z at ``speed_ratio`` x input speed.
+
+    ``speed_ratio = 0`` is a non-rotating frame (housing, bedplate); the carrier frame of a
+    planetary stage has ``speed_ratio = 1`` when the carrier is the input.
+    """
+
+    name: str
+    speed_ratio: float = 0.0
+
+    def __post_init__(self):
+        v.name("Frame.name", self.name)
+        self.speed_ratio = v.number(f"{self.name}.speed_ratio", self.speed_ratio)
+
+
+@dataclass(eq=False, kw_only=True)
+class Body:
+    """A rigid body with up to six small local DOF (DESIGN 2.1).
+
+    Parameters
+    ----------
+    mass : kg, > 0.
+    inertia : polar moment of inertia about the body's own axis, kg m^2, > 0.
+    inertia_diametral : moment of inertia about a diameter, kg m^2 (default ``inertia / 2``,
+        a thin disk); used only at the ``full`` level.
+    dofs : ``"torsional"``, ``"planar"`` or ``"full"``.
+    frame : name of the frame the body's coordinates are expressed in.
+    position : (x, y, z) of the body's centre in its frame, m.
+    orientation : angle of the body's local axes about z in its frame, rad (``A1``).
+    speed_ratio : nominal absolute spin rate over the model's input speed (sign = sense).
+    rotation_scale : if given, the rotational coordinate is ``u = rotation_scale * theta`` (m),
+        as in Lin & Parker's ``u = r theta``; otherwise it is ``theta`` (rad).
+    coordinate_names : optional renaming of local coordinates, e.g. ``{"x": "zeta"}``.
+    """
+
+    name: str = ""
+    mass: float
+    inertia: float
+    inertia_diametral: float | None = None
+    dofs: str = "torsional"
+    frame: str = "ground"
+    position: tuple = (0.0, 0.0, 0.0)
+    orientation: float = 0.0
+    speed_ratio: float = 0.0
+    rotation_scale: float | None = None
+    coordinate_names: dict = field(default_factory=dict)
+
+    def _label(self) -> str:
+        return self.name or type(self).__name__
+
+    def __post_init__(self):
+        f = self._label()
+        if self.name:
+            v.name(f"{type(self).__name__}.name", self.name)
+        self.mass = v.positive(f"{f}.mass", self.mass, "kg")
+        self.inertia = v.positive(f"{f}.inertia", self.inertia, "kg m^2")
+        if self.inertia_diametral is None:
+            self.inertia_diametral = self.inertia / 2.0
+        self.inertia_diametral = v.positive(f"{f}.inertia_diametral", self.inertia_diametral,
+                                            "kg m^2")
+        v.choice(f"{f}.dofs", self.dofs, DOF_LEVELS)
+        if not isinstance(self.frame, str):
+            raise ModelError(f"{f}.frame", f"expected a frame name, got {self.frame!r}")
+        pos = tuple(self.position)
+        if len(pos) == 2:
+            pos = (*pos, 0.0)
+        if len(pos) != 3:
+            raise ModelError(f"{f}.position", f"= {self.position!r}: expected (x, y, z) in m")
+        self.position = tuple(v.number(f"{f}.position", p, "m") for p in pos)
+        self.orientation = v.number(f"{f}.orientation", self.orientation, "rad")
+        self.speed_ratio = v.number(f"{f}.speed_ratio", self.speed_ratio)
+        if self.rotation_scale is not None:
+            self.rotation_scale = v.positive(f"{f}.rotation_scale", self.rotation_scale, "m")
+
+    # -- coordinates ---------------------------------------------------------------------
+    @property
+    def local_indices(self) -> tuple:
+        """Indices into (x, y, z, rx, ry, theta) of this body's coordinates."""
+        return LEVEL_INDICES[self.dofs]
+
+    @property
+    def coordinates(self) -> list[str]:
+        """Local coordinate names at this body's DOF level (after renaming)."""
+        names = []
+        for i in self.local_indices:
+            base = LOCAL_NAMES[i]
+            if base == "theta" and self.rotation_scale is not None:
+                base = "u"
+            names.append(self.coordinate_names.get(LOCAL_NAMES[i], base))
+        return names
+
+
+@dataclass(eq=False, kw_only=True)
+class RigidBody(Body):
+    """A rigid body that is not a gear: carrier, housing, rotor, generator rotor, shaft hub."""
+
+
+@dataclass(eq=False)
+class Gear(Body):
+    """A gear wheel.
+
+    Parameters
+    ----------
+    teeth : number of teeth (>= 3; for an internal gear the ring's tooth count).
+    module : normal module, m (> 0), e.g. 0.010 for 10 mm.
+    pressure_angle : normal pressure angle, rad, in (0, pi/4).
+    helix_angle : helix angle, rad, in (-pi/4, pi/4); signed (positive = right hand).
+    face_width : m, needed only where the model uses it (full level, tilt terms).
+    internal : True for a ring gear (internal teeth).
+    mass, inertia, ... : as :class:`Body` (keyword-only).
+
+    The base radius is ``teeth * module * cos(pressure_angle) / 2`` for spur gears and
+    ``teeth * m_t * cos(alpha_t) / 2`` with transverse module ``m_t = module / cos(helix)`` and
+    ``tan(alpha_t) = tan(pressure_angle) / cos(helix)`` for helical gears.
+    """
+
+    teeth: int = 0
+    module: float = 0.0
+    pressure_angle: float = 0.0
+    helix_angle: float = 0.0
+    face_width: float | None = None
+    internal: bool = False
+
+    def __post_init__(self):
+        f = self._label()
+        self.teeth = v.integer(f"{f}.teeth", self.teeth, minimum=3)
+        self.module = v.positive(f"{f}.module", self.module, "m")
+        if self.module > 1.0:
+            raise ModelError(f"{f}.module", f"= {self.module!r} m: must be <= 1 m "
+                                            "(modules are in metres: 10 mm = 0.010)")
+        self.pressure_angle = v.angle(f"{f}.pressure_angle", self.pressure_angle,
+                                      low=1e-6, high=math.pi / 4)
+        self.helix_angle = v.angle(f"{f}.helix_angle", self.helix_angle,
+                                   low=-math.pi / 4, high=math.pi / 4)
+        if self.face_width is not None:
+            self.face_width = v.positive(f"{f}.face_width", self.face_width, "m")
+        if not isinstance(self.internal, bool):
+            raise ModelError(f"{f}.internal", f"expected true/false, got {self.internal!r}")
+        super().__post_init__()
+
+    @property
+    def transverse_pressure_angle(self) -> float:
+        """Transverse pressure angle alpha_t, rad: tan(alpha_t) = tan(alpha_n) / cos(beta)."""
+        return math.atan(math.tan(self.pressure_angle) / math.cos(self.helix_angle))
+
+    @property
+    def pitch_radius(self) -> float:
+        """Reference (pitch) radius, m: teeth * m_t / 2."""
+        return self.teeth * self.module / math.cos(self.helix_angle) / 2.0
+
+    @property
+    def base_radius(self) -> float:
+        """Base-circle radius, m: pitch radius * cos(alpha_t)."""
+        return self.pitch_radius * math.cos(self.transverse_pressure_angle)
+
+    @property
+    def base_helix_angle(self) -> float:
+        """Base helix angle beta_b, rad: tan(beta_b) = tan(beta) cos(alpha_t)."""
+        return math.atan(math.tan(self.helix_angle) * math.cos(self.transverse_pressure_angle))
+
+
+@dataclass(eq=False)
+class Mesh:
+    """A gear mesh with two compression-only flanks and backlash (DESIGN 2.2).
+
+    The front flank carries ``stiffness * d_f + damping * d_f'`` while ``d_f > 0``; the back
+    flank ``stiffness * (d_b - backlash) + damping * d_b'`` while ``d_b > backlash``. ``q = 0`` is
+    front flanks touching with zero force. ``side`` (+1 or -1) picks which line of action is the
+    front flank: with ``side = +1`` a positive rotation of ``gear_a`` closes the front flank.
+    For an internal pair ``gear_a`` is the ring.
+
+    ``pressure_angle`` (transverse, rad), ``base_radii`` (m, m), ``helix_angle`` (base helix,
+    rad) and ``internal`` override the values derived from the gears (used by
+    :func:`gearmodal.lin_parker_stage`, whose bodies carry no tooth data).
+    """
+
+    name: str
+    gear_a: str
+    gear_b: str
+    stiffness: float
+    backlash: float = 0.0
+    damping: float = 0.0
+    side: int = 1
+    pressure_angle: float | None = None
+    base_radii: tuple | None = None
+    helix_angle: float | None = None
+    internal: bool | None = None
+
+    def __post_init__(self):
+        f = self.name
+        v.name("Mesh.name", self.name)
+        self.stiffness = v.nonnegative(f"{f}.stiffness", self.stiffness, "N/m")
+        self.backlash = v.nonnegative(f"{f}.backlash", self.backlash, "m")
+        self.damping = v.nonnegative(f"{f}.damping", self.damping, "N s/m")
+        if self.side not in (1, -1):
+            raise ModelError(f"{f}.side", f"= {self.side!r}: must be +1 or -1")
+        if self.pressure_angle is not None:
+            self.pressure_angle = v.angle(f"{f}.pressure_angle", self.pressure_angle,
+                                          low=1e-6, high=math.pi / 2)
+
+
+@dataclass(eq=False)
+class Bearing:
+    """A spring-damper between body ``a`` and body ``b`` (or ground), per direction (DESIGN 2.3).
+
+    ``stiffness``, ``damping`` and ``clearance`` are dicts keyed by direction ``x, y, z`` (N/m,
+    N s/m, m) and ``rx, ry, theta`` (N m/rad, N m s/rad, rad), in the bearing axes: the axes of
+    ``axes_frame`` (default: b's frame, or the ground) turned by ``axes_angle`` about z.
+    ``clearance`` is the free play on each side of the centred position (a dead band): a
+    direction with clearance ``c`` pushes back with ``k (d - c)`` when ``d > c`` and with
+    ``k (d + c)`` when ``d < -c``, where ``d`` is the deflection of a relative to b.
+    ``at`` is the point where the bearing acts, as an offset from a's centre in a's frame, m.
+    """
+
+    name: str
+    a: str
+    b: str | None = None
+    stiffness: dict = field(default_factory=dict)
+    damping: dict = field(default_factory=dict)
+    clearance: dict = field(default_factory=dict)
+    at: tuple = (0.0, 0.0, 0.0)
+    axes_angle: float = 0.0
+    axes_frame: str | None = None
+
+    def __post_init__(self):
+        f = self.name
+        v.name("Bearing.name", self.name)
+        for label, d, unit in (("stiffness", self.stiffness, "N/m or N m/rad"),
+                               ("damping", self.damping, "N s/m or N m s/rad"),
+                               ("clearance", self.clearance, "m or rad")):
+            if not isinstance(d, dict):
+                raise ModelError(f"{f}.{label}", f"expected a table keyed by direction "
+                                                 f"({', '.join(DIRECTIONS)}), got {d!r}")
+            for key in list(d):
+                if key not in DIRECTIONS:
+                    raise ModelError(f"{f}.{label}.{key}", "unknown direction; allowed: "
+                                     + ", ".join(DIRECTIONS))
+                d[key] = v.nonnegative(f"{f}.{label}.{key}", d[key], unit)
+        for key in list(self.damping) + list(self.clearance):
+            if key not in self.stiffness:
+                raise ModelError(f"{f}.stiffness.{key}", "missing: damping or clearance is "
+                                 f"given for direction {key!r} but no stiffness")
+        at = tuple(self.at)
+        if len(at) == 2:
+            at = (*at, 0.0)
+        if len(at) != 3:
+            raise ModelError(f"{f}.at", f"= {self.at!r}: expected (x, y, z) in m")
+        self.at = tuple(v.number(f"{f}.at", p, "m") for p in at)
+        self.axes_angle = v.number(f"{f}.axes_angle", self.axes_angle, "rad")
+
+
+def Shaft(name: str, a: str, b: str, stiffness: float, damping: float = 0.0) -> Bearing:
+    """A torsional shaft or coupling between bodies ``a`` and ``b``.
+
+    ``stiffness`` in N m/rad and ``damping`` in N m s/rad act on the relative rotation
+    ``theta_a - theta_b``.
+    """
+    k = v.nonnegative(f"{name}.stiffness", stiffness, "N m/rad")
+    c = v.nonnegative(f"{name}.damping", damping, "N m s/rad")
+    return Bearing(name, a, b, stiffness={"theta": k}, damping={"theta": c} if c else {})

@@ -1,0 +1,219 @@
+"""The :class:`Model`: a named collection of frames, bodies, meshes and bearings.
+
+Every DOF and load has a stable dotted name: ``<body>.<coordinate>`` (``"sun.theta"``,
+``"planet1.zeta"``) and ``<body>.<load>`` (``"pinion.torque"``, ``"carrier.force_x"``). Models
+built by stage builders are merged into drivetrains under a prefix (``"stage1.sun.theta"``).
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import replace
+
+from ..errors import ModelError
+from .components import LEVEL_INDICES, Bearing, Body, Frame, Mesh
+
+GROUND = "ground"
+
+#: load name suffix -> index into the global (fx, fy, fz, mx, my, mz) of the body's centre
+LOAD_KINDS = {"force_x": 0, "force_y": 1, "force_z": 2, "moment_x": 3, "moment_y": 4,
+              "torque": 5}
+
+
+class Model:
+    """A gearbox or drivetrain model.
+
+    Parameters
+    ----------
+    name : model name, used in reports.
+    input : name of the input body: the model's speed is this body's speed (the carrier of a
+        planetary stage, the rotor of a drivetrain); other bodies turn at ``speed_ratio`` times
+        it.
+    rated_speed_rpm, speed_range_rpm : optional operating data used by reports (rpm of the input).
+    """
+
+    def __init__(self, name: str = "model", input: str | None = None,
+                 rated_speed_rpm: float | None = None,
+                 speed_range_rpm: tuple | None = None):
+        self.name = name
+        self.input = input
+        self.rated_speed_rpm = rated_speed_rpm
+        self.speed_range_rpm = speed_range_rpm
+        self.frames: dict[str, Frame] = {GROUND: Frame(GROUND, 0.0)}
+        self.bodies: dict[str, Body] = {}
+        self.meshes: dict[str, Mesh] = {}
+        self.bearings: dict[str, Bearing] = {}
+        self.groups: dict[str, list[str]] = {}
+        self.output: str | None = None
+        self.gear_ratio: float | None = None
+
+    # -- building -------------------------------------------------------------------------
+    def add(self, component):
+        """Add a frame, body, mesh or bearing; returns it. Names must be unique per kind."""
+        if isinstance(component, Frame):
+            table, kind = self.frames, "frame"
+        elif isinstance(component, Body):
+            if not component.name:
+                raise ModelError("Body.name", "a body needs a name before it is added to a model")
+            table, kind = self.bodies, "body"
+        elif isinstance(component, Mesh):
+            table, kind = self.meshes, "mesh"
+        elif isinstance(component, Bearing):
+            table, kind = self.bearings, "bearing"
+        else:
+            raise TypeError(f"cannot add {type(component).__name__} to a Model")
+        if component.name in table:
+            raise ModelError(component.name, f"a {kind} of this name is already in the model")
+        if kind in ("mesh", "bearing") and component.name in self.bodies:
+            raise ModelError(component.name, "name already used by a body")
+        if kind == "body" and (component.name in self.meshes or component.name in self.bearings):
+            raise ModelError(component.name, "name already used by a mesh or bearing")
+        table[component.name] = component
+        return component
+
+    def merge(self, other: Model, prefix: str, ground: str | None = None) -> Model:
+        """Copy ``other``'s components into this model, names prefixed by ``prefix + '.'``.
+
+        References to the ground in ``other`` are redirected to body ``ground`` when given (a
+        stage mounted in a housing). Returns ``self``.
+        """
+        def p(n):
+            return f"{prefix}.{n}" if n else n
+
+        for fr in other.frames.values():
+            if fr.name != GROUND:
+                self.add(Frame(p(fr.name), fr.speed_ratio))
+        for b in other.bodies.values():
+            nb = copy.copy(b)
+            nb.name = p(b.name)
+            nb.frame = b.frame if b.frame == GROUND else p(b.frame)
+            nb.coordinate_names = dict(b.coordinate_names)
+            self.bodies[self._free(nb.name)] = nb
+        for m in other.meshes.values():
+            self.meshes[self._free(p(m.name))] = replace(m, name=p(m.name), gear_a=p(m.gear_a),
+                                                         gear_b=p(m.gear_b))
+        for br in other.bearings.values():
+            b = p(br.b) if br.b is not None else ground
+            af = br.axes_frame
+            if af is not None and af != GROUND:
+                af = p(af)
+            self.bearings[self._free(p(br.name))] = replace(
+                br, name=p(br.name), a=p(br.a), b=b, axes_frame=af,
+                stiffness=dict(br.stiffness), damping=dict(br.damping),
+                clearance=dict(br.clearance))
+        for g, members in other.groups.items():
+            self.groups[p(g)] = [p(m) for m in members]
+        return self
+
+    def _free(self, name: str) -> str:
+        if name in self.bodies or name in self.meshes or name in self.bearings:
+            raise ModelError(name, "name already used in the model")
+        return name
+
+    # -- naming ---------------------------------------------------------------------------
+    @property
+    def dof_names(self) -> list[str]:
+        """All DOF names, in assembly order (bodies in insertion order)."""
+        return [f"{b.name}.{c}" for b in self.bodies.values() for c in b.coordinates]
+
+    @property
+    def n_dofs(self) -> int:
+        return sum(len(LEVEL_INDICES[b.dofs]) for b in self.bodies.values())
+
+    def load_directions(self, body: Body) -> list[tuple[str, int]]:
+        """(load name, global direction index) pairs available on ``body`` at its DOF level."""
+        out = []
+        for kind, idx in LOAD_KINDS.items():
+            if idx in body.local_indices or (idx < 5 and _moves(body, idx)):
+                if kind == "torque" and body.rotation_scale is not None:
+                    out.append((f"{body.name}.force_u", idx))
+                else:
+                    out.append((f"{body.name}.{kind}", idx))
+        return out
+
+    @property
+    def load_names(self) -> list[str]:
+        """All load names, e.g. ``"pinion.torque"`` (N m), ``"carrier.force_x"`` (N)."""
+        return [n for b in self.bodies.values() for n, _ in self.load_directions(b)]
+
+    # -- checks ---------------------------------------------------------------------------
+    def check(self) -> Model:
+        """Check references between components; raise :class:`ModelError` naming the field."""
+        if not self.bodies:
+            raise ModelError(f"{self.name}.bodies", "the model has no bodies")
+        if self.input is not None and self.input not in self.bodies:
+            raise ModelError(f"{self.name}.input", f"= {self.input!r}: no such body; bodies: "
+                             + ", ".join(self.bodies))
+        for b in self.bodies.values():
+            if b.frame not in self.frames:
+                raise ModelError(f"{b.name}.frame", f"= {b.frame!r}: no such frame; frames: "
+                                 + ", ".join(self.frames))
+        from .components import Gear
+        for m in self.meshes.values():
+            for side in ("gear_a", "gear_b"):
+                ref = getattr(m, side)
+                if ref not in self.bodies:
+                    raise ModelError(f"{m.name}.{side}", f"= {ref!r}: no such body")
+                if m.base_radii is None and not isinstance(self.bodies[ref], Gear):
+                    raise ModelError(f"{m.name}.{side}", f"= {ref!r} is not a Gear; give "
+                                     "base_radii and pressure_angle on the mesh")
+            a, b = self.bodies[m.gear_a], self.bodies[m.gear_b]
+            fa, fb = self.frames[a.frame], self.frames[b.frame]
+            if fa.speed_ratio != fb.speed_ratio:
+                raise ModelError(f"{m.name}", f"gears {a.name!r} and {b.name!r} sit in frames "
+                                 "turning at different speeds; put both in one frame")
+            if isinstance(b, Gear) and b.internal:
+                raise ModelError(f"{m.name}.gear_b", f"= {b.name!r} is internal; the internal "
+                                 "gear (ring) must be gear_a")
+        for br in self.bearings.values():
+            if br.a not in self.bodies:
+                raise ModelError(f"{br.name}.a", f"= {br.a!r}: no such body")
+            if br.b is not None and br.b not in self.bodies:
+                raise ModelError(f"{br.name}.b", f"= {br.b!r}: no such body")
+            if br.axes_frame is not None and br.axes_frame not in self.frames:
+                raise ModelError(f"{br.name}.axes_frame", f"= {br.axes_frame!r}: no such frame")
+        return self
+
+    def set_dofs(self, level: str, bodies=None) -> Model:
+        """Set the DOF level of all (or the named) bodies; returns ``self``."""
+        from .components import DOF_LEVELS
+        from .validate import choice
+        choice("dofs", level, DOF_LEVELS)
+        for name in bodies if bodies is not None else list(self.bodies):
+            if name not in self.bodies:
+                raise ModelError("dofs", f"no body {name!r}")
+            self.bodies[name].dofs = level
+        return self
+
+    def copy(self) -> Model:
+        """A deep copy (components are mutable dataclasses)."""
+        return copy.deepcopy(self)
+
+    def summary(self) -> str:
+        """A short text summary: bodies, DOF count, meshes, bearings."""
+        levels = {}
+        for b in self.bodies.values():
+            levels[b.dofs] = levels.get(b.dofs, 0) + 1
+        lv = ", ".join(f"{n} {k}" for k, n in levels.items())
+        return (f"{self.name}: {len(self.bodies)} bodies ({lv}), {self.n_dofs} DOF, "
+                f"{len(self.meshes)} meshes, {len(self.bearings)} bearings/shafts")
+
+    def __repr__(self) -> str:
+        return f"<Model {self.summary()}>"
+
+    def assemble(self, azimuth: float = 0.0):
+        """Assemble the linear(ised) matrices: see :func:`gearmodal.assembly.assemble`."""
+        from ..assembly import assemble
+        return assemble(self, azimuth=azimuth)
+
+
+def _moves(body: Body, idx: int) -> bool:
+    """True if the body has the local coordinate that a global direction idx (0-4) acts on.
+
+    Local x/y mix under the frame rotation, so a force_x exists when x and y both exist.
+    """
+    if idx in (0, 1):
+        return 0 in body.local_indices
+    if idx in (3, 4):
+        return 3 in body.local_indices
+    return idx in body.local_indices

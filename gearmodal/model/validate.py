@@ -1,0 +1,88 @@
+"""Field checks shared by the API and the TOML loader.
+
+Each check raises :class:`gearmodal.errors.ModelError` naming the field, the value given and the
+allowed range, e.g. ``stage1.sun.mass = -3.0: must be > 0 kg``.
+"""
+
+from __future__ import annotations
+
+import math
+from numbers import Real
+
+from ..errors import ModelError
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, Real) and not isinstance(value, bool)
+
+
+def number(field: str, value, unit: str = "", *, minimum: float | None = None,
+           strict: bool = False, maximum: float | None = None,
+           max_strict: bool = False) -> float:
+    """Return ``value`` as float after checking its type and range.
+
+    ``strict`` makes the lower bound exclusive (``> minimum``), else inclusive (``>= minimum``).
+    """
+    if not _is_number(value):
+        raise ModelError(field, f"expected a number{f' in {unit}' if unit else ''}, "
+                                f"got {type(value).__name__} {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ModelError(field, f"= {v!r}: must be finite")
+    u = f" {unit}" if unit else ""
+    if minimum is not None and (v <= minimum if strict else v < minimum):
+        op = ">" if strict else ">="
+        raise ModelError(field, f"= {v!r}: must be {op} {minimum:g}{u}")
+    if maximum is not None and (v >= maximum if max_strict else v > maximum):
+        op = "<" if max_strict else "<="
+        raise ModelError(field, f"= {v!r}: must be {op} {maximum:g}{u}")
+    return v
+
+
+def positive(field: str, value, unit: str = "") -> float:
+    """A number > 0 (masses, inertias, modules, radii)."""
+    return number(field, value, unit, minimum=0.0, strict=True)
+
+
+def nonnegative(field: str, value, unit: str = "") -> float:
+    """A number >= 0 (stiffness, damping, clearance, backlash)."""
+    return number(field, value, unit, minimum=0.0)
+
+
+def integer(field: str, value, *, minimum: int) -> int:
+    """An integer >= ``minimum`` (tooth and planet counts)."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        else:
+            raise ModelError(field, f"expected an integer, got {type(value).__name__} {value!r}")
+    if value < minimum:
+        raise ModelError(field, f"= {value}: must be an integer >= {minimum}")
+    return int(value)
+
+
+def angle(field: str, value, *, low: float, high: float, high_strict: bool = True) -> float:
+    """An angle in radians in [low, high) with a hint when degrees were given by mistake."""
+    v = number(field, value, "rad")
+    if v < low or (v >= high if high_strict else v > high):
+        hint = ""
+        if v > high and math.radians(v) < high + 1e-12 and math.radians(v) >= low:
+            hint = f" (angles are in radians; did you mean {math.radians(v):.6g} = radians({v:g})?)"
+        rng = f"[{low:g}, {high:.6g}{')' if high_strict else ']'}"
+        raise ModelError(field, f"= {v!r} rad: must lie in {rng} rad{hint}")
+    return v
+
+
+def choice(field: str, value, allowed) -> str:
+    """One of a fixed set of strings."""
+    if value not in allowed:
+        raise ModelError(field, f"= {value!r}: must be one of {', '.join(map(repr, allowed))}")
+    return value
+
+
+def name(field: str, value) -> str:
+    """A component name: non-empty, no dots (dots separate name parts in DOF names)."""
+    if not isinstance(value, str) or not value or "." in value or value.strip() != value:
+        raise ModelError(field, f"= {value!r}: must be a non-empty string without dots or "
+                                "surrounding spaces")
+    return value
