@@ -1,0 +1,85 @@
+"""Generic joint constraint ``g(q_a, q_b)``, ``G_a``, ``G_b`` (DESIGN 2.5; bearing deflection, 2.3).
+
+Material point ``P_a`` of body ``a`` (offset ``pa`` from its centre) and ``P_b`` of body ``b``
+(offset ``pb``) are nominally coincident. With joint axes ``E = Rz(gamma) = [e1 e2 e3]`` and the
+body displacements ``q = (ux, uy, uz, rx, ry, rz)`` (global axes, exact rotation ``Rs``):
+
+    g = [ E^T ((u_a + (Rs(r_a) - I) pa) - (u_b + (Rs(r_b) - I) pb)) ;
+          E^T (r_a - r_b) ]
+
+the relative translation of the two points in joint axes (exact) and the relative small
+rotation. ``G_a = dg/dq_a``, ``G_b = dg/dq_b`` at ``q = 0`` are the constraint gradients of the
+Lagrange-multiplier coupling ``B + G^T lambda = 0, g = 0`` (DESIGN 2.5).
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from .codegen import Kernel, ScalarArg, VectorArg, print_module
+from .rotations import Rs, Rz
+
+SOURCE = "joint"
+DESCRIPTION = "Joint/bearing constraint (DESIGN 2.3, 2.5): exact residual g and gradients G_a, G_b."
+
+pax, pay, paz, pbx, pby, pbz = sp.symbols("pax pay paz pbx pby pbz", real=True)
+gamma = sp.Symbol("gamma", real=True)
+
+QA = sp.symbols("uax uay uaz rax ray raz", real=True)
+QB = sp.symbols("ubx uby ubz rbx rby rbz", real=True)
+
+_DOCS = {
+    pax: "x of the offset from a's centre to the joint point (global axes)",
+    pay: "y of the offset from a's centre",
+    paz: "z of the offset from a's centre",
+    pbx: "x of the offset from b's centre to the joint point",
+    pby: "y of the offset from b's centre",
+    pbz: "z of the offset from b's centre",
+    gamma: "joint axes angle: e1 = Rz(gamma) x_hat, e2 = Rz(gamma) y_hat, e3 = z_hat",
+}
+
+
+def derive() -> dict[str, sp.Matrix]:
+    """Return the exact residual ``g`` (6,) and the gradients ``Ga``, ``Gb`` (6, 6) at 0."""
+    E = Rz(gamma)
+    pa = sp.Matrix([pax, pay, paz])
+    pb = sp.Matrix([pbx, pby, pbz])
+    ua, ra = sp.Matrix(QA[:3]), QA[3:]
+    ub, rb = sp.Matrix(QB[:3]), QB[3:]
+    dpa = ua + (Rs(ra) - sp.eye(3)) @ pa
+    dpb = ub + (Rs(rb) - sp.eye(3)) @ pb
+    g = sp.Matrix.vstack(E.T @ (dpa - dpb), E.T @ (sp.Matrix(ra) - sp.Matrix(rb)))
+    zero = dict.fromkeys(QA + QB, 0)
+    Ga = g.jacobian(QA).subs(zero)
+    Gb = g.jacobian(QB).subs(zero)
+    return {"g": g, "Ga": Ga, "Gb": Gb}
+
+
+def kernels() -> list[Kernel]:
+    """The generated kernels of ``gearmodal/kernels/joint.py``."""
+    d = derive()
+    geo = [ScalarArg(s, _DOCS[s]) for s in (pax, pay, paz, pbx, pby, pbz, gamma)]
+    qa = VectorArg("qa", QA, "displacements of a (ux, uy, uz, rx, ry, rz), global axes")
+    qb = VectorArg("qb", QB, "displacements of b (ux, uy, uz, rx, ry, rz), global axes")
+    return [
+        Kernel(
+            "joint_residual",
+            [qa, qb, *geo],
+            [d["g"]],
+            "Exact joint residual g (6,): relative translation and rotation in joint axes "
+            "(DESIGN 2.5).",
+        ),
+        Kernel(
+            "joint_gradients",
+            geo,
+            [d["Ga"], d["Gb"]],
+            "Constraint gradients (Ga, Gb), each (6, 6): dg/dq_a and dg/dq_b at q = 0 "
+            "(DESIGN 2.5).",
+            output_names=["Ga", "Gb"],
+        ),
+    ]
+
+
+def generate_source() -> str:
+    """Text of ``gearmodal/kernels/joint.py``."""
+    return print_module(SOURCE, DESCRIPTION, kernels())
