@@ -1,0 +1,116 @@
+"""Command line: ``gearmodal campbell|modal|info MODEL.toml``.
+
+Input errors (:class:`gearmodal.ModelError`, missing files) are printed as one line without a
+traceback and the exit status is 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ModelError
+
+
+def _speeds(text: str) -> np.ndarray:
+    try:
+        a, b, n = text.split(":")
+        a, b, n = float(a), float(b), int(n)
+    except ValueError:
+        raise ModelError("--speeds", f"= {text!r}: expected A:B:N, e.g. 0:30:61") from None
+    if not (0 <= a < b) or n < 2:
+        raise ModelError("--speeds", f"= {text!r}: need 0 <= A < B and N >= 2")
+    return np.linspace(a, b, n)
+
+
+def _default_speeds(model) -> np.ndarray:
+    top = None
+    if model.speed_range_rpm:
+        top = 1.2 * model.speed_range_rpm[1]
+    elif model.rated_speed_rpm:
+        top = 1.5 * model.rated_speed_rpm
+    return np.linspace(0.0, top or 100.0, 61)
+
+
+def _load(path: str):
+    from .model.toml_io import load
+
+    return load(path)
+
+
+def cmd_campbell(args) -> int:
+    from tqdm import tqdm
+
+    from .campbell import campbell
+    from .modal import modal
+    from .report import write_campbell_report
+
+    model = _load(args.model)
+    speeds = _speeds(args.speeds) if args.speeds else _default_speeds(model)
+    with tqdm(total=len(speeds), desc="Campbell sweep", unit="speed",
+              disable=args.quiet) as bar:
+        camp = campbell(model, speeds, progress=lambda i, n: bar.update(1))
+    rated = model.rated_speed_rpm if model.rated_speed_rpm is not None else float(speeds[-1])
+    res = modal(model, speed_rpm=rated)
+    out = write_campbell_report(camp, res, args.out, summary=model.summary())
+    print(f"wrote {out}/report.html")
+    return 0
+
+
+def cmd_modal(args) -> int:
+    from .modal import modal
+    from .report import write_modal_report
+
+    model = _load(args.model)
+    speed = args.speed if args.speed is not None else (model.rated_speed_rpm or 0.0)
+    res = modal(model, speed_rpm=speed)
+    out = write_modal_report(res, args.out, summary=model.summary())
+    print(f"wrote {out}/report.html")
+    return 0
+
+
+def cmd_info(args) -> int:
+    model = _load(args.model)
+    print(model.summary())
+    for n in model.dof_names:
+        print(" ", n)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="gearmodal", description="Wind-turbine gearbox dynamics.")
+    sub = p.add_subparsers(dest="command", required=True)
+    c = sub.add_parser("campbell", help="Campbell diagram and modal report of a model file")
+    c.add_argument("model", help="model file (TOML)")
+    c.add_argument("--out", required=True, help="output folder")
+    c.add_argument("--speeds", help="input speeds A:B:N in rpm (default 0 to 1.2 x range)")
+    c.add_argument("--quiet", action="store_true", help="no progress bar")
+    c.set_defaults(func=cmd_campbell)
+    m = sub.add_parser("modal", help="modes at one speed, with report")
+    m.add_argument("model")
+    m.add_argument("--out", required=True)
+    m.add_argument("--speed", type=float, help="input speed in rpm (default: rated)")
+    m.set_defaults(func=cmd_modal)
+    i = sub.add_parser("info", help="model summary and DOF names")
+    i.add_argument("model")
+    i.set_defaults(func=cmd_info)
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except ModelError as e:
+        print(f"gearmodal: error: {e}", file=sys.stderr)
+        return 2
+    except FileNotFoundError as e:
+        print(f"gearmodal: error: {e.filename or e}: file not found", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

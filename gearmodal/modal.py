@@ -1,0 +1,238 @@
+"""Modal analysis of a model at one input speed (DESIGN 3.1).
+
+Undamped and non-rotating: the generalised symmetric eigenproblem ``K phi = w^2 M phi``.
+Otherwise the first-order (state-space) form of ``M q'' + (C + Omega G) q' + (K + Omega^2 K_cent) q
+= 0``. The contact state is the nominal one (front flanks engaged, bearing clearances taken up)
+unless a state is given.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import scipy.linalg as sla
+
+from .assembly import Assembly
+from .errors import ModelError
+from .model.model import Model
+
+RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
+
+
+@dataclass
+class ModalResult:
+    """Natural frequencies and mode shapes at one speed.
+
+    Attributes
+    ----------
+    speed_rpm : input speed, rpm.
+    frequencies_hz : undamped natural frequencies ``|lambda| / 2 pi``, ascending, Hz
+        (rigid-body modes near 0 included).
+    damping_ratios : ``-Re(lambda) / |lambda|`` (0 for undamped modes).
+    shapes : (n_dofs, n_modes) mode shapes, complex when rotating or damped, each scaled to a
+        largest component of 1.
+    dof_names : names of the rows of ``shapes``.
+    kinetic_energy, strain_energy : DataFrames (modes x bodies / elements) with each mode's
+        share of kinetic energy per body and of strain energy per spring element (rows sum to 1).
+    mode_types : label per mode (see :func:`classify`); ``labels`` overrides by mode index.
+    """
+
+    speed_rpm: float
+    frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    shapes: np.ndarray
+    dof_names: list
+    kinetic_energy: pd.DataFrame
+    strain_energy: pd.DataFrame
+    mode_types: list = field(default_factory=list)
+    model_name: str = ""
+
+    @property
+    def n_modes(self) -> int:
+        return len(self.frequencies_hz)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per mode: ``mode``, ``frequency_hz``, ``damping_ratio``, ``mode_type``,
+        ``dominant_body`` (largest kinetic energy share) and that share."""
+        ke = self.kinetic_energy
+        return pd.DataFrame({
+            "mode": np.arange(self.n_modes),
+            "speed_rpm": self.speed_rpm,
+            "frequency_hz": self.frequencies_hz,
+            "damping_ratio": self.damping_ratios,
+            "mode_type": self.mode_types,
+            "dominant_body": ke.idxmax(axis=1).to_numpy() if ke.shape[1] else "",
+            "dominant_share": ke.max(axis=1).to_numpy() if ke.shape[1] else np.nan,
+        })
+
+    def shape(self, i: int) -> pd.Series:
+        """Mode ``i``'s shape as a Series indexed by DOF name (real part after phase
+        alignment)."""
+        return pd.Series(_real_shape(self.shapes[:, i]), index=self.dof_names, name=f"mode {i}")
+
+    def plot_shape(self, i: int, ax=None):
+        """Bar chart of mode ``i``'s shape per DOF; returns the matplotlib Figure."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            fig, ax = plt.subplots(figsize=(max(6.0, 0.18 * len(self.dof_names)), 3.2))
+        else:
+            fig = ax.figure
+        s = self.shape(i)
+        ax.bar(range(len(s)), s.to_numpy(), color="C0")
+        ax.set_xticks(range(len(s)))
+        ax.set_xticklabels(s.index, rotation=90, fontsize=6)
+        ax.set_ylabel("normalised amplitude")
+        typ = self.mode_types[i] if self.mode_types else ""
+        ax.set_title(f"mode {i}: {self.frequencies_hz[i]:.3f} Hz {typ} "
+                     f"({self.speed_rpm:g} rpm)")
+        fig.tight_layout()
+        return fig
+
+    def save(self, directory) -> Path:
+        """Write ``modes.csv``, ``shapes.csv``, ``kinetic_energy.csv``, ``strain_energy.csv``
+        and ``modal.json`` into ``directory``; returns the directory."""
+        d = Path(directory)
+        d.mkdir(parents=True, exist_ok=True)
+        self.to_frame().to_csv(d / "modes.csv", index=False)
+        pd.DataFrame(np.array([_real_shape(s) for s in self.shapes.T]).T,
+                     index=self.dof_names).to_csv(d / "shapes.csv", index_label="dof")
+        self.kinetic_energy.to_csv(d / "kinetic_energy.csv", index_label="mode")
+        self.strain_energy.to_csv(d / "strain_energy.csv", index_label="mode")
+        (d / "modal.json").write_text(json.dumps(
+            {"model": self.model_name, "speed_rpm": self.speed_rpm,
+             "n_modes": self.n_modes}, indent=2))
+        return d
+
+
+def _real_shape(v: np.ndarray) -> np.ndarray:
+    """Rotate a complex shape so its largest component is real; return the real part."""
+    j = int(np.argmax(np.abs(v)))
+    if np.abs(v[j]) == 0:
+        return np.real(v)
+    return np.real(v * np.conj(v[j]) / np.abs(v[j]))
+
+
+def _as_assembly(model) -> tuple[Assembly, str]:
+    if isinstance(model, Assembly):
+        return model, ""
+    if isinstance(model, Model):
+        return model.assemble(), model.name
+    raise TypeError(f"expected a gm.Model or gm.Assembly, got {type(model).__name__}")
+
+
+def eigensolve(M, C, K, G=None, speed=0.0, Kc=None):
+    """Eigenvalues ``lambda`` (n,) and displacement shapes (n, n) of the quadratic problem
+    ``(lambda^2 M + lambda (C + speed G) + K + speed^2 Kc) phi = 0``, one per DOF, ordered by
+    ``|lambda|``. Uses the symmetric generalised solver when the damping term vanishes."""
+    n = M.shape[0]
+    D = C + (speed * G if G is not None and speed else 0.0)
+    Ks = K + (speed**2 * Kc if Kc is not None and speed else 0.0)
+    if not np.any(D):
+        w2, phi = sla.eigh(Ks, M)
+        lam = np.sqrt(w2.astype(complex))  # negative w2 (centripetal softening) -> real lambda
+        lam = np.where(w2 >= 0, 1j * np.sqrt(np.clip(w2, 0, None)), lam)
+        order = np.argsort(np.abs(lam), kind="stable")
+        return lam[order], phi[:, order].astype(complex)
+    Minv_K = sla.solve(M, Ks, assume_a="pos")
+    Minv_D = sla.solve(M, D, assume_a="pos")
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv_K, -Minv_D]])
+    lam, vec = sla.eig(A)
+    scale = max(1.0, float(np.max(np.abs(lam))))
+    osc = np.abs(lam.imag) > 1e-9 * scale
+    pos = np.flatnonzero(osc & (lam.imag > 0))
+    real = np.flatnonzero(~osc)
+    real = real[np.argsort(np.abs(lam[real]), kind="stable")]
+    keep = np.concatenate([pos, real[: max(0, n - len(pos))]])
+    lam, vec = lam[keep], vec[:n, keep]
+    order = np.argsort(np.abs(lam), kind="stable")
+    return lam[order], vec[:, order]
+
+
+def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=None,
+          labels: dict | None = None) -> ModalResult:
+    """Natural frequencies, damping ratios and mode shapes of ``model`` at ``speed_rpm``.
+
+    Parameters
+    ----------
+    model : a :class:`gearmodal.Model` (or an already assembled :class:`Assembly`).
+    speed_rpm : input speed in rpm (gyroscopic and centripetal terms scale with it).
+    loads : not yet supported here (static equilibrium under load comes with the modal
+        report issue); pass ``state`` to pick a contact state explicitly.
+    state : contact-state booleans (default: nominal state).
+    labels : ``{mode index: label}`` overriding the automatic mode types.
+
+    Examples
+    --------
+    >>> import math, gearmodal as gm
+    >>> p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
+    >>> w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
+    >>> res = gm.modal(gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4))
+    >>> [round(f, 1) for f in res.frequencies_hz]
+    [0.0, 2991.1]
+    """
+    speed_rpm = float(speed_rpm)
+    if not math.isfinite(speed_rpm) or speed_rpm < 0:
+        raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number >= 0 rpm")
+    if loads:
+        raise ModelError("loads", "static equilibrium under load is not implemented yet; "
+                         "give the contact state with state=...")
+    asm, name = _as_assembly(model)
+    om = speed_rpm * RPM
+    s = asm.state(state)
+    K = asm.stiffness(s)
+    C = asm.damping(s)
+    lam, shapes = eigensolve(asm.M, C, K, asm.G, om, asm.K_cent)
+    absl = np.abs(lam)
+    freq = absl / (2 * math.pi)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        zeta = np.where(absl > 0, -lam.real / np.where(absl > 0, absl, 1.0), 0.0)
+    zeta = np.where(np.abs(zeta) < 1e-12, 0.0, zeta)
+    big = np.argmax(np.abs(shapes), axis=0)
+    shapes = shapes / shapes[big, np.arange(shapes.shape[1])]
+    ke, se = energies(asm, shapes, freq, s)
+    from .modetypes import classify
+    types = classify(asm, shapes, freq)
+    for i, lab in (labels or {}).items():
+        types[int(i)] = str(lab)
+    return ModalResult(speed_rpm=speed_rpm, frequencies_hz=freq, damping_ratios=zeta,
+                       shapes=shapes, dof_names=list(asm.dof_names), kinetic_energy=ke,
+                       strain_energy=se, mode_types=types, model_name=name)
+
+
+def energies(asm: Assembly, shapes: np.ndarray, freq_hz: np.ndarray, state=None):
+    """Modal kinetic energy share per body and strain energy share per spring element.
+
+    Kinetic: ``phi_b^H M_bb phi_b`` per body (M is block-diagonal by body); strain:
+    ``k |w . phi|^2`` per spring, summed per element (mesh flanks, bearing directions).
+    """
+    n_modes = shapes.shape[1]
+    bodies = list(asm.body_slices)
+    ke = np.zeros((n_modes, len(bodies)))
+    for j, b in enumerate(bodies):
+        sl = asm.body_slices[b]
+        phi = shapes[sl]
+        ke[:, j] = np.real(np.einsum("im,ij,jm->m", phi.conj(), asm.M[sl, sl], phi))
+    tot = ke.sum(axis=1, keepdims=True)
+    ke = np.divide(ke, tot, out=np.zeros_like(ke), where=tot > 0)
+    c = asm.contacts
+    s = asm.state(state)
+    elems = list(dict.fromkeys(c.element))
+    se = np.zeros((n_modes, len(elems)))
+    for e, (name, active) in enumerate(zip(c.element, s)):
+        if active:
+            d = c.W[e] @ shapes
+            se[:, elems.index(name)] += c.stiffness[e] * np.abs(d) ** 2
+    # always-active springs of K (bearings without clearance, shafts): per body pair is not
+    # recoverable from K alone, so they are reported together as "linear springs".
+    lin = np.real(np.einsum("im,ij,jm->m", shapes.conj(), asm.K, shapes))
+    se = np.column_stack([se, lin]) if len(elems) else lin[:, None]
+    cols = [*elems, "linear springs"]
+    tot = se.sum(axis=1, keepdims=True)
+    se = np.divide(se, tot, out=np.zeros_like(se), where=tot > 0)
+    return (pd.DataFrame(ke, columns=bodies), pd.DataFrame(se, columns=cols))

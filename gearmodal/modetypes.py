@@ -1,0 +1,73 @@
+"""Mode type labels from the kinetic energy of each DOF group.
+
+For planetary stages the Lin & Parker (1999) types: ``rotational`` (central members rotate
+only, planets move alike), ``translational`` (central members translate only), ``planet``
+(central members at rest). For drivetrains also ``housing`` (the housing on its suspension
+carries most of the kinetic energy), ``torsional`` (rotational coordinates carry nearly all of
+it) and ``mixed``; ``rigid`` for modes at (near) zero frequency.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+#: share of kinetic energy below which a DOF group counts as at rest
+QUIET = 1e-6
+
+
+def dof_energy(asm, shapes: np.ndarray) -> np.ndarray:
+    """Kinetic energy share of every DOF in every mode, (n_dofs, n_modes), columns sum to 1."""
+    e = np.real(shapes.conj() * (asm.M @ shapes))
+    tot = e.sum(axis=0, keepdims=True)
+    return np.divide(e, tot, out=np.zeros_like(e), where=tot > 0)
+
+
+def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e-6) -> list[str]:
+    """Label each mode (column of ``shapes``) by where its kinetic energy sits.
+
+    A mode is ``rigid`` when its frequency is below ``rigid_rel`` times the highest one (the
+    eigen-solver resolves a zero frequency only to about sqrt(eps) of the spectrum's width).
+    """
+    rigid_hz = rigid_rel * float(np.max(freq_hz)) if len(freq_hz) else 0.0
+    names = asm.dof_names
+    e = dof_energy(asm, shapes)
+    rot = np.array([n.rsplit(".", 1)[1] in ("theta", "u") for n in names])
+    body = [n.rsplit(".", 1)[0] for n in names]
+    planet = np.array([b.rsplit(".", 1)[-1].startswith("planet") for b in body])
+    stage_of = [b.rsplit(".", 1)[0] if "." in b else "" for b in body]
+    central = np.zeros(len(names), dtype=bool)
+    for i, b in enumerate(body):
+        leaf = b.rsplit(".", 1)[-1]
+        central[i] = leaf in ("carrier", "sun", "ring")
+    housing = np.array([b == "housing" or b.endswith(".housing") for b in body])
+    has_planets = planet.any()
+    types = []
+    for m in range(shapes.shape[1]):
+        em = e[:, m]
+        if freq_hz[m] < rigid_hz:
+            types.append("rigid")
+            continue
+        if housing.any() and em[housing].sum() > 0.5:
+            types.append("housing")
+            continue
+        if has_planets:
+            # Lin & Parker types, judged on the stage holding most of the energy
+            stage = pd.Series(em).groupby(pd.Series(stage_of)).sum().idxmax()
+            in_stage = np.array([s == stage for s in stage_of])
+            c, p = central & in_stage, planet & in_stage
+            if (c | p).any() and em[c | p].sum() > 0.5:
+                if em[c].sum() < QUIET:
+                    types.append("planet")
+                    continue
+                if em[c & ~rot].sum() < QUIET * em[c].sum() + QUIET:
+                    types.append("rotational")
+                    continue
+                if em[c & rot].sum() < QUIET * em[c].sum() + QUIET:
+                    types.append("translational")
+                    continue
+        if em[rot].sum() > 0.9:
+            types.append("torsional")
+        else:
+            types.append("mixed")
+    return types

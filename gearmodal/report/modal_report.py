@@ -1,0 +1,114 @@
+"""The Campbell/modal report: CSV tables, figures and one self-contained ``report.html``."""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # reports are written without a screen
+import matplotlib.pyplot as plt  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from ..campbell import CampbellResult  # noqa: E402
+from ..modal import ModalResult  # noqa: E402
+
+#: number of (non-rigid) lowest modes that get a mode-shape figure
+N_SHAPES = 6
+
+
+def _png(fig, path: Path) -> str:
+    fig.savefig(path, dpi=130)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    plt.close(fig)
+    return base64.b64encode(buf.getvalue()).decode()
+
+
+def _table(df: pd.DataFrame, highlight=None, floatfmt="{:.4g}") -> str:
+    rows = []
+    head = "".join(f"<th>{html.escape(str(c))}</th>" for c in df.columns)
+    for i, r in df.iterrows():
+        cls = ' class="hl"' if highlight is not None and bool(highlight.loc[i]) else ""
+        cells = "".join(
+            f"<td>{floatfmt.format(v) if isinstance(v, float) else html.escape(str(v))}</td>"
+            for v in r)
+        rows.append(f"<tr{cls}>{cells}</tr>")
+    return f"<table><tr>{head}</tr>{''.join(rows)}</table>"
+
+
+_CSS = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
+table{border-collapse:collapse;font-size:12px;margin:0.5em 0 1.5em}
+td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}th{background:#eee}
+tr.hl td{background:#ffe1e1;font-weight:bold}img{max-width:100%}
+.figs img{max-width:48%;margin:0.5%}"""
+
+
+def _shape_figures(res: ModalResult, out: Path) -> list[tuple[str, str]]:
+    figs = []
+    idx = [i for i, t in enumerate(res.mode_types) if t != "rigid"][:N_SHAPES]
+    for i in idx:
+        fig = res.plot_shape(i)
+        figs.append((f"mode_{i:02d}.png", _png(fig, out / f"mode_{i:02d}.png")))
+    return figs
+
+
+def write_modal_report(res: ModalResult, out, summary: str = "") -> Path:
+    """Write ``modes.csv``, shape tables, mode-shape figures and ``report.html`` to ``out``."""
+    out = Path(out)
+    res.save(out)
+    figs = _shape_figures(res, out)
+    modes = res.to_frame()
+    body = [f"<h1>Modal report: {html.escape(res.model_name)}</h1>",
+            f"<p>{html.escape(summary)}</p>",
+            f"<p>Input speed {res.speed_rpm:g} rpm; nominal contact state (front flanks "
+            "engaged, bearing clearances taken up).</p>",
+            "<h2>Modes</h2>", _table(modes),
+            "<h2>Lowest mode shapes</h2><div class='figs'>",
+            *[f"<img alt='{n}' src='data:image/png;base64,{b}'>" for n, b in figs], "</div>"]
+    (out / "report.html").write_text(_page(res.model_name, body))
+    return out
+
+
+def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
+                          summary: str = "") -> Path:
+    """Write the Campbell report into ``out``: ``campbell.csv``, ``crossings.csv``,
+    ``modes.csv``, ``campbell.png``, ``mode_XX.png`` and a self-contained ``report.html``
+    (model summary, modes at rated speed, crossings with those inside the operating range
+    highlighted)."""
+    out = Path(out)
+    camp.save(out)
+    res.save(out)
+    fig = camp.plot()
+    cpng = _png(fig, out / "campbell.png")
+    figs = _shape_figures(res, out)
+    cr = camp.crossings()
+    modes = res.to_frame()
+    rng = camp.speed_range_rpm
+    rng_txt = f"{rng[0]:g}-{rng[1]:g} rpm" if rng else "the whole sweep"
+    body = [f"<h1>Campbell report: {html.escape(camp.model_name)}</h1>",
+            f"<p>{html.escape(summary)}</p>",
+            f"<p>Speed sweep {camp.speeds_rpm[0]:g}-{camp.speeds_rpm[-1]:g} rpm of the input "
+            f"({len(camp.speeds_rpm)} speeds); operating range {rng_txt}. Modes tracked by "
+            "mass-weighted MAC with one-to-one assignment.</p>",
+            f"<img alt='campbell' src='data:image/png;base64,{cpng}'>",
+            "<h2>Excitation orders</h2>",
+            _table(pd.DataFrame({"order": list(camp.orders),
+                                 "per_revolution": list(camp.orders.values())})),
+            f"<h2>Crossings ({int(cr.in_operating_range.sum())} inside the operating "
+            "range, highlighted)</h2>",
+            _table(cr, highlight=cr.in_operating_range) if len(cr) else "<p>none</p>",
+            f"<h2>Modes at {res.speed_rpm:g} rpm</h2>", _table(modes),
+            "<h2>Lowest mode shapes</h2><div class='figs'>",
+            *[f"<img alt='{n}' src='data:image/png;base64,{b}'>" for n, b in figs], "</div>"]
+    (out / "report.html").write_text(_page(camp.model_name, body))
+    return out
+
+
+def _page(title: str, body: list[str]) -> str:
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>"
+            f"{html.escape(title)}</title><style>{_CSS}</style></head><body>"
+            + "\n".join(body) + "</body></html>")

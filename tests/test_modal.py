@@ -1,0 +1,100 @@
+"""Modal analysis: closed forms and the Lin & Parker (1999) mode structure."""
+
+import math
+
+import numpy as np
+import pytest
+
+import gearmodal as gm
+from gearmodal.modal import modal
+
+LP = dict(mass={"carrier": 5.43, "ring": 2.35, "sun": 0.4, "planet": 0.66},
+          inertia_over_r2={"carrier": 6.29, "ring": 3.0, "sun": 0.39, "planet": 0.61},
+          bearing={"carrier": 1e8, "ring": 1e8, "sun": 1e8, "planet": 1e8},
+          torsional={"carrier": 0.0, "ring": 1e9, "sun": 0.0},
+          mesh={"sun_planet": 5e8, "ring_planet": 5e8})
+ALPHA = math.radians(24.6)
+
+
+def test_gear_pair_torsional_frequency_closed_form():
+    """omega^2 = k (r_p^2 / I_p + r_w^2 / I_w) for the torsional pair; plus one rigid mode."""
+    p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
+    w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
+    res = modal(gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4))
+    f = math.sqrt(2e8 * (p.base_radius**2 / 1e-3 + w.base_radius**2 / 1.6e-2)) / 2 / math.pi
+    assert res.frequencies_hz[1] == pytest.approx(f, rel=1e-12)
+    assert res.frequencies_hz[0] < 1e-6 * f
+    assert res.mode_types == ["rigid", "torsional"]
+
+
+def groups(freqs, rtol=1e-8):
+    """Cluster sorted frequencies into (value, multiplicity)."""
+    out = []
+    for f in freqs:
+        if out and abs(f - out[-1][0]) <= rtol * max(f, 1.0):
+            out[-1][1] += 1
+        else:
+            out.append([f, 1])
+    return out
+
+
+@pytest.mark.parametrize("n", [3, 4, 5, 6])
+@pytest.mark.parametrize("speed_rpm", [0.0, 600.0])
+def test_lin_parker_mode_structure(n, speed_rpm):
+    """Equally spaced planets, isotropic supports: rotational modes are simple, translational
+    modes double, planet modes have multiplicity N - 3 (Lin & Parker 1999)."""
+    res = modal(gm.lin_parker_stage(n, **LP, pressure_angle=ALPHA), speed_rpm=speed_rpm)
+    types = np.array(res.mode_types)
+    f = res.frequencies_hz
+    assert len(f) == 3 * (n + 3)
+    # free sun and carrier rotation (k_su = k_cu = 0) give a rigid mode at rest; under
+    # rotation Lin & Parker's centripetal term lifts it off zero and it stays rotational
+    assert (types == "rigid").sum() == (1 if speed_rpm == 0 else 0)
+    assert (types == "rotational").sum() + (types == "rigid").sum() == 6
+    assert (types == "translational").sum() == 12
+    assert (types == "planet").sum() == 3 * (n - 3)
+    # multiplicities, with a tolerance far below the smallest frequency gap (~1e-2 relative);
+    # under rotation the translational pairs split into forward and backward whirl
+    mults = (("rotational", 1), ("translational", 2 if speed_rpm == 0 else 1),
+             ("planet", n - 3))
+    for typ, mult in mults:
+        sel = np.sort(f[types == typ])
+        if len(sel):
+            assert all(m == mult for _, m in groups(sel)), (typ, groups(sel))
+
+
+def test_unequal_spacing_breaks_degeneracy():
+    res = modal(gm.lin_parker_stage(4, **LP, pressure_angle=ALPHA,
+                                    planet_angles=[0.0, 1.4, 3.3, 4.6]))
+    g = groups(np.sort(res.frequencies_hz[1:]), rtol=1e-6)
+    assert all(m == 1 for _, m in g)
+    eq = modal(gm.lin_parker_stage(4, **LP, pressure_angle=ALPHA))
+    assert any(m == 2 for _, m in groups(np.sort(eq.frequencies_hz[1:])))
+
+
+def test_gyroscopic_split_of_isotropic_support():
+    """A mass on an isotropic support in a frame turning at Omega: in the rotating frame the
+    translational frequencies are omega_0 +- Omega (exact for this linear model)."""
+    m = gm.Model("disk", input="body")
+    m.add(gm.Frame("rot", 1.0))
+    m.add(gm.RigidBody(name="body", mass=2.0, inertia=1.0, dofs="planar", frame="rot",
+                       speed_ratio=1.0))
+    m.add(gm.Bearing("support", "body", None, stiffness={"x": 8e4, "y": 8e4, "theta": 1e3}))
+    w0 = math.sqrt(8e4 / 2.0)
+    om = 60.0 * 2 * math.pi / 60  # 60 rpm
+    res = modal(m, speed_rpm=60.0)
+    f = np.sort(res.frequencies_hz) * 2 * math.pi
+    expect = np.sort([w0 - om, w0 + om, math.sqrt(1e3)])
+    np.testing.assert_allclose(f, expect, rtol=1e-10)
+
+
+def test_modal_result_outputs(tmp_path):
+    res = modal(gm.lin_parker_stage(3, **LP, pressure_angle=ALPHA))
+    df = res.to_frame()
+    assert list(df.columns[:5]) == ["mode", "speed_rpm", "frequency_hz", "damping_ratio",
+                                    "mode_type"]
+    np.testing.assert_allclose(res.kinetic_energy.sum(axis=1), 1.0, rtol=1e-12)
+    res.save(tmp_path)
+    assert (tmp_path / "modes.csv").exists() and (tmp_path / "shapes.csv").exists()
+    fig = res.plot_shape(3)
+    assert fig.axes
