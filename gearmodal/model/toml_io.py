@@ -1,0 +1,686 @@
+"""Load a :class:`~gearmodal.model.Model` from a TOML file: ``gm.load(path)``, ``loads(text)``.
+
+The TOML mirrors the builders (:func:`~gearmodal.model.builders.drivetrain`,
+:func:`~gearmodal.model.builders.planetary_stage`, ...): ``[model] type`` picks the builder, and
+the other tables hold its arguments. Units are SI (m, kg, kg m^2, N/m, N m/rad, N s/m) except
+angles, which are given in **degrees** in keys ending in ``_deg`` (``pressure_angle_deg``,
+``helix_angle_deg``, ``planet_angles_deg``, ``angle_deg``) and converted to radians for the API.
+Speeds are in rpm of the input (rotor, carrier or pinion).
+
+Every error is a :class:`~gearmodal.errors.ModelError` whose ``field`` is the full dotted TOML
+path of the offending key, e.g. ``stages[0].ring.teeth: = 98: ring teeth must equal sun + 2 *
+planet (21 + 2 * 39 = 99)``; when loading a file the message ends with ``(in <file>)``. The
+range checks are the components' and builders' own; this module checks the document's shape
+(tables, unknown and missing keys, degree values) and renames the builders' field names to the
+TOML paths.
+
+Schema
+------
+``[model]`` (all types)
+    ``type`` (required): ``"drivetrain"``, ``"gear_pair"``, ``"planetary_stage"``,
+    ``"parallel_stage"`` or ``"lin_parker_stage"``. ``name`` (default: the file name without
+    extension, or the type), ``rated_speed_rpm``, ``speed_range_rpm = [lo, hi]``.
+
+Gear tables (``sun``, ``planet``, ``ring``, ``gear``, ``pinion``, ``wheel``)
+    ``teeth``, ``module`` (m), ``pressure_angle_deg`` (normal), ``helix_angle_deg`` (signed,
+    default 0), ``face_width`` (m, optional), ``mass`` (kg), ``inertia`` (polar, kg m^2),
+    ``inertia_diametral`` (kg m^2, optional). The ring is internal by definition.
+
+Rigid-body tables (``rotor``, ``generator``, ``housing``, a stage's ``carrier``)
+    ``mass`` (kg), ``inertia`` (kg m^2), ``inertia_diametral`` (optional) and, except for the
+    carrier, ``dofs`` (default ``"torsional"``, for the housing ``"planar"``).
+
+Supports (``planet_bearing``, ``carrier_bearing``, ``sun_support``, ``ring_support``,
+``gear_bearing``, ``pinion_bearing``, gear_pair ``bearing``, ``shaft_bending``, ``suspension``)
+    A number (translational stiffness in N/m on x, y, and z at ``full``), or a table with
+    ``stiffness``, ``damping`` and ``clearance`` tables keyed by direction ``x, y, z`` (N/m,
+    N s/m, m) and ``rx, ry, theta`` (N m/rad, N m s/rad, rad), as :class:`Bearing`. A planet
+    bearing's x/y are radial/tangential.
+
+``type = "drivetrain"`` (:func:`~gearmodal.model.builders.drivetrain`)
+    ``[rotor]``; ``[main_shaft]`` with ``stiffness`` (N m/rad) and ``damping``;
+    ``[shaft_bending]`` (optional support of the first stage's input, i.e. the main shaft end
+    through the main bearing); ``[[stages]]`` (input first), each a planetary or parallel stage
+    table (below) plus ``type = "planetary" | "parallel"``, an optional ``name`` (default
+    ``stage<k>``, the DOF name prefix) and, from the second stage on, ``coupling_stiffness``
+    (N m/rad, torsional coupling to the previous stage's output, default 1e9);
+    ``[generator]`` with ``[hss_shaft]`` (``stiffness``, ``damping``); ``[housing]`` with
+    ``[suspension]``.
+
+Planetary stage (``[planetary_stage]`` or a ``[[stages]]`` entry)
+    ``[<stage>.carrier]``, ``[<stage>.sun]``, ``[<stage>.planet]``, ``[<stage>.ring]``;
+    ``mesh_stiffness`` (N/m, a number or ``{sun_planet = .., ring_planet = ..}``), ``backlash``
+    (m), ``mesh_damping`` (N s/m), ``n_planets`` (default 3), ``planet_angles_deg`` (default equally
+    spaced), ``dofs`` (default ``"planar"``), and the supports ``planet_bearing``,
+    ``carrier_bearing``, ``sun_support``, ``ring_support``.
+
+Parallel stage (``[parallel_stage]`` or a ``[[stages]]`` entry)
+    ``[<stage>.gear]`` (the large input wheel), ``[<stage>.pinion]``; ``mesh_stiffness``,
+    ``backlash``, ``mesh_damping``, ``dofs`` (default ``"planar"``), ``position = [x, y]`` (m),
+    ``angle_deg`` (direction from gear to pinion), ``gear_bearing``, ``pinion_bearing``.
+
+``[gear_pair]``
+    ``[gear_pair.pinion]``, ``[gear_pair.wheel]``, ``mesh_stiffness``, ``backlash`` (required),
+    ``mesh_damping``, ``dofs`` (default ``"torsional"``), ``bearing`` (required unless torsional).
+
+``[lin_parker_stage]`` (:func:`~gearmodal.model.builders.lin_parker_stage`)
+    ``n_planets``, ``pressure_angle_deg`` (a number or ``{sun_planet, ring_planet}``),
+    ``planet_angles_deg``, ``backlash``, ``mesh_damping`` and the tables ``mass``,
+    ``inertia_over_r2`` (kg), ``bearing`` (keys ``carrier, ring, sun, planet``; N/m),
+    ``torsional`` (``carrier, ring, sun``; N/m on ``u = r theta``), ``mesh``
+    (``sun_planet, ring_planet``; N/m).
+
+Example
+-------
+A complete drivetrain (``studies/models/600kw.toml`` is the documented full-size one)::
+
+    [model]
+    name = "demo"
+    type = "drivetrain"
+    rated_speed_rpm = 22.1             # rpm of the rotor
+    speed_range_rpm = [0.0, 25.0]
+
+    [rotor]
+    mass = 11000.0                     # kg
+    inertia = 4.0e5                    # kg m^2
+
+    [main_shaft]
+    stiffness = 4.8e7                  # N m/rad
+
+    [shaft_bending]
+    stiffness = { x = 1.0e7, y = 1.0e7 }   # N/m
+
+    [[stages]]
+    type = "planetary"
+    n_planets = 3
+    mesh_stiffness = { sun_planet = 4.6e9, ring_planet = 5.0e9 }   # N/m
+    backlash = 3.0e-4                  # m
+    planet_bearing = 2.0e9             # N/m, radial and tangential
+    carrier_bearing = 1.0e9            # N/m
+    ring_support = { stiffness = { x = 1e10, y = 1e10, theta = 1e10 } }
+    [stages.carrier]
+    mass = 1000.0
+    inertia = 110.0
+    [stages.sun]
+    teeth = 21
+    module = 0.010                     # m
+    pressure_angle_deg = 20.0
+    helix_angle_deg = 7.5
+    mass = 80.0
+    inertia = 0.45
+    [stages.planet]
+    teeth = 39
+    module = 0.010
+    pressure_angle_deg = 20.0
+    helix_angle_deg = -7.5
+    mass = 140.0
+    inertia = 3.5
+    [stages.ring]
+    teeth = 99
+    module = 0.010
+    pressure_angle_deg = 20.0
+    helix_angle_deg = -7.5
+    mass = 600.0
+    inertia = 180.0
+
+    [[stages]]
+    type = "parallel"
+    coupling_stiffness = 6.0e6         # N m/rad, sun shaft to the wheel
+    mesh_stiffness = 3.4e9
+    gear_bearing = 1.5e9
+    pinion_bearing = 1.5e9
+    [stages.gear]
+    teeth = 82
+    module = 0.00825
+    pressure_angle_deg = 20.0
+    helix_angle_deg = 14.0
+    mass = 350.0
+    inertia = 25.0
+    [stages.pinion]
+    teeth = 23
+    module = 0.00825
+    pressure_angle_deg = 20.0
+    helix_angle_deg = -14.0
+    mass = 90.0
+    inertia = 0.4
+
+    [generator]
+    mass = 1000.0
+    inertia = 15.0
+
+    [hss_shaft]
+    stiffness = 2.0e5                  # N m/rad
+
+    [housing]
+    mass = 5000.0
+    inertia = 1500.0
+
+    [suspension]
+    stiffness = { x = 2.0e7, y = 2.0e7, theta = 2.0e7 }
+
+The single-builder types put the builder's arguments in one table named after the type::
+
+    [model]
+    type = "gear_pair"
+    [gear_pair]
+    mesh_stiffness = 2.0e8             # N/m
+    backlash = 1.0e-4                  # m
+    [gear_pair.pinion]
+    teeth = 20
+    module = 0.004
+    pressure_angle_deg = 20.0
+    mass = 1.0
+    inertia = 1.0e-3
+    [gear_pair.wheel]
+    teeth = 40
+    module = 0.004
+    pressure_angle_deg = 20.0
+    mass = 4.0
+    inertia = 1.6e-2
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from contextlib import contextmanager
+from pathlib import Path
+
+from ..errors import ModelError
+from . import builders
+from . import validate as v
+from .components import Gear, RigidBody
+from .model import Model
+
+__all__ = ["MODEL_TYPES", "load", "loads"]
+
+MODEL_TYPES = ("drivetrain", "gear_pair", "planetary_stage", "parallel_stage",
+               "lin_parker_stage")
+STAGE_TYPES = ("planetary", "parallel")
+
+# Keys of each table: key -> (required, what it is). The hint is shown for missing keys.
+_MODEL_KEYS = {"type": (True, "one of " + ", ".join(MODEL_TYPES)), "name": (False, "string"),
+               "rated_speed_rpm": (False, "rpm"),
+               "speed_range_rpm": (False, "[low, high] in rpm")}
+_GEAR_KEYS = {"teeth": (True, "integer"), "module": (True, "m"),
+              "pressure_angle_deg": (True, "deg"), "helix_angle_deg": (False, "deg"),
+              "face_width": (False, "m"), "mass": (True, "kg"), "inertia": (True, "kg m^2"),
+              "inertia_diametral": (False, "kg m^2")}
+_BODY_KEYS = {"mass": (True, "kg"), "inertia": (True, "kg m^2"),
+              "inertia_diametral": (False, "kg m^2"),
+              "dofs": (False, "torsional, planar or full")}
+_CARRIER_KEYS = {k: _BODY_KEYS[k] for k in ("mass", "inertia", "inertia_diametral")}
+_SHAFT_KEYS = {"stiffness": (True, "N m/rad"), "damping": (False, "N m s/rad")}
+_SUPPORT_KEYS = {"stiffness": (True, "table keyed by direction"),
+                 "damping": (False, "table keyed by direction"),
+                 "clearance": (False, "table keyed by direction")}
+_STAGE_COMMON = {"type": (False, "planetary or parallel"), "name": (False, "string"),
+                 "coupling_stiffness": (False, "N m/rad"),
+                 "dofs": (False, "torsional, planar or full"),
+                 "mesh_stiffness": (True, "N/m"), "backlash": (False, "m"),
+                 "mesh_damping": (False, "N s/m")}
+_PLANETARY_KEYS = {**_STAGE_COMMON, "n_planets": (False, "integer"),
+                   "planet_angles_deg": (False, "list of deg"), "carrier": (True, "table"),
+                   "sun": (True, "table"), "planet": (True, "table"), "ring": (True, "table"),
+                   "planet_bearing": (False, "support"), "carrier_bearing": (False, "support"),
+                   "sun_support": (False, "support"), "ring_support": (False, "support")}
+_PARALLEL_KEYS = {**_STAGE_COMMON, "position": (False, "[x, y] in m"),
+                  "angle_deg": (False, "deg"), "gear": (True, "table"),
+                  "pinion": (True, "table"), "gear_bearing": (False, "support"),
+                  "pinion_bearing": (False, "support")}
+_GEAR_PAIR_KEYS = {"dofs": (False, "torsional, planar or full"),
+                   "mesh_stiffness": (True, "N/m"), "backlash": (True, "m"),
+                   "mesh_damping": (False, "N s/m"), "bearing": (False, "support"),
+                   "pinion": (True, "table"), "wheel": (True, "table")}
+_LIN_PARKER_KEYS = {"n_planets": (True, "integer"), "pressure_angle_deg": (True, "deg"),
+                    "planet_angles_deg": (False, "list of deg"), "backlash": (False, "m"),
+                    "mesh_damping": (False, "N s/m"), "mass": (True, "table, kg"),
+                    "inertia_over_r2": (True, "table, kg"), "bearing": (True, "table, N/m"),
+                    "torsional": (True, "table, N/m"), "mesh": (True, "table, N/m")}
+_MESH_KEYS = {"sun_planet": (True, "N/m"), "ring_planet": (True, "N/m")}
+_SECTIONS = {
+    "drivetrain": {"model": True, "rotor": True, "main_shaft": True, "shaft_bending": False,
+                   "stages": True, "generator": False, "hss_shaft": False, "housing": False,
+                   "suspension": False},
+    "gear_pair": {"model": True, "gear_pair": True},
+    "planetary_stage": {"model": True, "planetary_stage": True},
+    "parallel_stage": {"model": True, "parallel_stage": True},
+    "lin_parker_stage": {"model": True, "lin_parker_stage": True},
+}
+
+
+# -- public API -----------------------------------------------------------------------------
+def load(path) -> Model:
+    """Load and validate a model from the TOML file ``path``.
+
+    Raises :class:`~gearmodal.errors.ModelError` naming the TOML field (and the file) for
+    any invalid input, including TOML syntax errors.
+
+    Examples
+    --------
+    >>> import gearmodal as gm
+    >>> model = gm.load("studies/models/600kw.toml")  # doctest: +SKIP
+    >>> round(model.gear_ratio, 2)  # doctest: +SKIP
+    81.49
+    """
+    p = Path(path)
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except OSError as e:
+        raise ModelError(str(p), f"cannot read the file: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise ModelError(str(p), f"not a UTF-8 text file ({e.reason} at byte {e.start})") \
+            from None
+    return loads(text, source=str(p), default_name=p.stem)
+
+
+def loads(text: str, source: str = "<string>", *, default_name: str | None = None) -> Model:
+    """Load and validate a model from TOML ``text``; ``source`` names it in error messages.
+
+    Examples
+    --------
+    >>> from gearmodal.model.toml_io import loads
+    >>> m = loads('''
+    ... [model]
+    ... type = "gear_pair"
+    ... [gear_pair]
+    ... mesh_stiffness = 2e8
+    ... backlash = 1e-4
+    ... [gear_pair.pinion]
+    ... teeth = 20
+    ... module = 0.004
+    ... pressure_angle_deg = 20
+    ... mass = 1.0
+    ... inertia = 1e-3
+    ... [gear_pair.wheel]
+    ... teeth = 40
+    ... module = 0.004
+    ... pressure_angle_deg = 20
+    ... mass = 4.0
+    ... inertia = 1.6e-2
+    ... ''')
+    >>> m.dof_names
+    ['pinion.theta', 'wheel.theta']
+    """
+    if not isinstance(text, str):
+        raise ModelError(source, f"expected TOML text (str), got {type(text).__name__}")
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ModelError(source, _syntax_message(e)) from None
+    try:
+        return _build(doc, default_name)
+    except ModelError as e:
+        if source == "<string>":
+            raise
+        raise ModelError(e.field, f"{_message(e)} (in {source})") from None
+
+
+# -- errors ---------------------------------------------------------------------------------
+def _syntax_message(e: tomllib.TOMLDecodeError) -> str:
+    text = str(e)
+    m = re.search(r"\(at line (\d+), column (\d+)\)\s*$", text)
+    if m:
+        reason = text[:m.start()].strip()
+        return f"TOML syntax error at line {m.group(1)}, column {m.group(2)}: {reason}"
+    return f"TOML syntax error: {text}"
+
+
+def _message(err: ModelError) -> str:
+    text = str(err)
+    return text[len(err.field) + 2:] if err.field and text.startswith(err.field + ": ") \
+        else text
+
+
+def _err(field: str, message: str) -> ModelError:
+    """A ModelError whose field is already the full TOML path."""
+    e = ModelError(field, message)
+    e._toml_path = True
+    return e
+
+
+def _join(path: str, key: str) -> str:
+    if not path:
+        return key
+    if not key:
+        return path
+    return f"{path}{key}" if key.startswith("[") else f"{path}.{key}"
+
+
+_RANGE = re.compile(r"\[([-+0-9.eE]+), ([-+0-9.eE]+)([)\]]) rad")
+
+
+def _degree_message(msg: str, deg: float) -> str:
+    """Restate a radian range message from the API in the degrees the TOML gave."""
+    rest = re.sub(r"^= \S+ rad: ", "", msg)
+    rest = re.sub(r" \(angles are in radians;.*\)$", "", rest)
+    rest = _RANGE.sub(lambda m: f"[{math.degrees(float(m.group(1))):.6g}, "
+                                f"{math.degrees(float(m.group(2))):.6g}{m.group(3)} deg", rest)
+    return f"= {deg!r} deg: {rest}"
+
+
+@contextmanager
+def _at(path: str, renames=(), degrees=None, words=()):
+    """Re-raise a builder's or component's ModelError with its field as a TOML path.
+
+    ``renames`` are ``(regex, replacement)`` pairs applied in turn to the API field name;
+    ``degrees`` maps a renamed radian field to ``(TOML key, value in degrees)``; ``words`` are
+    ``(API word, TOML key)`` pairs replaced in the message.
+    """
+    try:
+        yield
+    except ModelError as e:
+        if getattr(e, "_toml_path", False):
+            raise
+        field, msg = e.field, _message(e)
+        for pattern, repl in renames:
+            field = re.sub(pattern, repl, field)
+        if degrees and field in degrees:
+            field, deg = degrees[field]
+            msg = _degree_message(msg, deg)
+        for word, key in words:
+            msg = re.sub(rf"\b{word}\b", key, msg)
+        raise _err(_join(path, field), msg) from None
+
+
+# -- shape checks ---------------------------------------------------------------------------
+def _table(path: str, value, keys: dict, what: str = "table") -> dict:
+    """Check that ``value`` is a table with only ``keys`` and all required ones."""
+    if not isinstance(value, dict):
+        raise _err(path, f"expected a {what}, got {type(value).__name__} {value!r}")
+    for key in value:
+        if key not in keys:
+            hint = ""
+            if f"{key}_deg" in keys:
+                hint = f" (angles are given in degrees: {key}_deg)"
+            raise _err(_join(path, key), f"unknown key{hint}; allowed: " + ", ".join(keys))
+    for key, (required, unit) in keys.items():
+        if required and key not in value:
+            raise _err(_join(path, key), f"missing: required key ({unit})")
+    return value
+
+
+def _degrees(path: str, value) -> tuple[float, float]:
+    """(degrees, radians) of an angle given in degrees."""
+    with _at("", ()):
+        deg = v.number(path, value, "deg")
+    return deg, math.radians(deg)
+
+
+def _support(path: str, value):
+    """A support: a number (N/m) or a table of direction tables; checks the shape only."""
+    if isinstance(value, dict):
+        _table(path, value, _SUPPORT_KEYS)
+        for key, sub in value.items():
+            if not isinstance(sub, dict):
+                raise _err(_join(path, key), "expected a table keyed by direction (x, y, z, "
+                                             f"rx, ry, theta), got {type(sub).__name__} {sub!r}")
+        return {k: dict(s) for k, s in value.items()}
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise _err(path, "expected a stiffness in N/m or a table with stiffness, damping and "
+                         f"clearance, got {type(value).__name__} {value!r}")
+    return value
+
+
+# -- components -----------------------------------------------------------------------------
+def _gear(path: str, value, name: str, internal: bool = False) -> Gear:
+    t = _table(path, value, _GEAR_KEYS)
+    pa_deg, pa = _degrees(_join(path, "pressure_angle_deg"), t["pressure_angle_deg"])
+    hx_deg, hx = _degrees(_join(path, "helix_angle_deg"), t.get("helix_angle_deg", 0.0))
+    degrees = {"pressure_angle": ("pressure_angle_deg", pa_deg),
+               "helix_angle": ("helix_angle_deg", hx_deg)}
+    with _at(path, [(rf"^{name}(\.|$)", "")], degrees):
+        return Gear(t["teeth"], t["module"], pa, hx, t.get("face_width"), internal, name=name,
+                    mass=t["mass"], inertia=t["inertia"],
+                    inertia_diametral=t.get("inertia_diametral"))
+
+
+def _body(path: str, value, name: str, default_dofs: str) -> RigidBody:
+    t = _table(path, value, _BODY_KEYS)
+    with _at(path, [(rf"^{name}(\.|$)", "")]):
+        return RigidBody(name=name, mass=t["mass"], inertia=t["inertia"],
+                         inertia_diametral=t.get("inertia_diametral"),
+                         dofs=t.get("dofs", default_dofs))
+
+
+def _angles(path: str, value) -> list[float]:
+    if not isinstance(value, list):
+        raise _err(path, f"expected a list of angles in deg, got {type(value).__name__} "
+                         f"{value!r}")
+    return [_degrees(f"{path}[{i}]", a)[1] for i, a in enumerate(value)]
+
+
+def _mesh_renames(table: bool) -> list:
+    """Map the names of the meshes a stage builder creates back to the stage's keys."""
+    return [(r"^(sun|ring)_planet\d+\.stiffness$",
+             r"mesh_stiffness.\1_planet" if table else "mesh_stiffness"),
+            (r"^((sun|ring)_planet\d+|mesh)\.backlash$", "backlash"),
+            (r"^((sun|ring)_planet\d+|mesh)\.damping$", "mesh_damping"),
+            (r"^mesh\.stiffness$", "mesh_stiffness")]
+
+
+def _stage_type(path: str, t: dict, expected: str | None) -> None:
+    if expected is not None and "type" in t and t["type"] != expected:
+        raise _err(_join(path, "type"), f"= {t['type']!r}: this table is a {expected} stage")
+
+
+def _planetary(path: str, value, in_drivetrain: bool = False) -> Model:
+    keys = _PLANETARY_KEYS if in_drivetrain else {
+        k: s for k, s in _PLANETARY_KEYS.items() if k not in ("name", "coupling_stiffness")}
+    t = _table(path, value, keys)
+    _stage_type(path, t, "planetary")
+    carrier = _table(_join(path, "carrier"), t["carrier"], _CARRIER_KEYS)
+    sun = _gear(_join(path, "sun"), t["sun"], "sun")
+    planet = _gear(_join(path, "planet"), t["planet"], "planet")
+    ring = _gear(_join(path, "ring"), t["ring"], "ring", internal=True)
+    k = t["mesh_stiffness"]
+    if isinstance(k, dict):
+        _table(_join(path, "mesh_stiffness"), k, _MESH_KEYS)
+    angles = None
+    if "planet_angles_deg" in t:
+        angles = _angles(_join(path, "planet_angles_deg"), t["planet_angles_deg"])
+    supports = {key: _support(_join(path, key), t[key])
+                for key in ("planet_bearing", "carrier_bearing", "sun_support", "ring_support")
+                if key in t}
+    renames = [(r"^planetary_stage(\.|$)", ""), *_mesh_renames(isinstance(k, dict)),
+               (r"^planet\d+_bearing(\.|$)", r"planet_bearing\1"),
+               (r"^planet_angles(\[|$)", r"planet_angles_deg\1")]
+    with _at(path, renames, words=[("planet_angles", "planet_angles_deg")]):
+        return builders.planetary_stage(
+            sun, planet, ring, n_planets=t.get("n_planets", 3),
+            carrier_mass=carrier["mass"], carrier_inertia=carrier["inertia"],
+            carrier_inertia_diametral=carrier.get("inertia_diametral"),
+            mesh_stiffness=k, backlash=t.get("backlash", 0.0),
+            mesh_damping=t.get("mesh_damping", 0.0), dofs=t.get("dofs", "planar"),
+            planet_angles=angles, **supports)
+
+
+def _parallel(path: str, value, in_drivetrain: bool = False) -> Model:
+    keys = _PARALLEL_KEYS if in_drivetrain else {
+        k: s for k, s in _PARALLEL_KEYS.items() if k not in ("name", "coupling_stiffness")}
+    t = _table(path, value, keys)
+    _stage_type(path, t, "parallel")
+    gear = _gear(_join(path, "gear"), t["gear"], "gear")
+    pinion = _gear(_join(path, "pinion"), t["pinion"], "pinion")
+    position = t.get("position", [0.0, 0.0])
+    if not isinstance(position, list) or len(position) != 2:
+        raise _err(_join(path, "position"),
+                   f"= {position!r}: expected [x, y] in m")
+    angle = 0.0
+    if "angle_deg" in t:
+        angle = _degrees(_join(path, "angle_deg"), t["angle_deg"])[1]
+    supports = {key: _support(_join(path, key), t[key])
+                for key in ("gear_bearing", "pinion_bearing") if key in t}
+    renames = [(r"^parallel_stage(\.|$)", ""), *_mesh_renames(False)]
+    with _at(path, renames):
+        return builders.parallel_stage(
+            gear, pinion, mesh_stiffness=t["mesh_stiffness"], backlash=t.get("backlash", 0.0),
+            mesh_damping=t.get("mesh_damping", 0.0), dofs=t.get("dofs", "planar"),
+            position=tuple(position), angle=angle, **supports)
+
+
+def _gear_pair(path: str, value) -> Model:
+    t = _table(path, value, _GEAR_PAIR_KEYS)
+    pinion = _gear(_join(path, "pinion"), t["pinion"], "pinion")
+    wheel = _gear(_join(path, "wheel"), t["wheel"], "wheel")
+    bearing = _support(_join(path, "bearing"), t["bearing"]) if "bearing" in t else None
+    renames = [(r"^gear_pair(\.|$)", ""), *_mesh_renames(False),
+               (r"^bearing_stiffness(\.|$)", r"bearing\1"),
+               (r"^(pinion|wheel)_bearing(\.|$)", r"bearing\2")]
+    with _at(path, renames):
+        return builders.gear_pair(pinion, wheel, t["mesh_stiffness"], t["backlash"],
+                                  mesh_damping=t.get("mesh_damping", 0.0),
+                                  dofs=t.get("dofs", "torsional"), bearing_stiffness=bearing)
+
+
+def _lin_parker(path: str, value) -> Model:
+    t = _table(path, value, _LIN_PARKER_KEYS)
+    pa = t["pressure_angle_deg"]
+    pa_path = _join(path, "pressure_angle_deg")
+    degrees = {}
+    if isinstance(pa, dict):
+        _table(pa_path, pa, _MESH_KEYS)
+        rad = {}
+        for key, a in pa.items():
+            deg, rad[key] = _degrees(_join(pa_path, key), a)
+            degrees[f"pressure_angle.{key}"] = (f"pressure_angle_deg.{key}", deg)
+        pa_rad = rad
+    else:
+        deg, pa_rad = _degrees(pa_path, pa)
+        degrees = {f"pressure_angle.{k}": ("pressure_angle_deg", deg) for k in _MESH_KEYS}
+    angles = None
+    if "planet_angles_deg" in t:
+        angles = _angles(_join(path, "planet_angles_deg"), t["planet_angles_deg"])
+    renames = [(r"^lin_parker_stage(\.|$)", ""),
+               (r"^(carrier|ring|sun|planet)\d*\.mass$", r"mass.\1"),
+               (r"^(sun|ring)_planet\d+\.backlash$", "backlash"),
+               (r"^(sun|ring)_planet\d+\.damping$", "mesh_damping"),
+               (r"^planet_angles(\[|$)", r"planet_angles_deg\1")]
+    with _at(path, renames, degrees):
+        return builders.lin_parker_stage(
+            t["n_planets"], t["mass"], t["inertia_over_r2"], t["bearing"], t["torsional"],
+            t["mesh"], pa_rad, angles, backlash=t.get("backlash", 0.0),
+            mesh_damping=t.get("mesh_damping", 0.0))
+
+
+def _drivetrain(doc: dict) -> Model:
+    rotor = _body("rotor", doc["rotor"], "rotor", "torsional")
+    shaft = _table("main_shaft", doc["main_shaft"], _SHAFT_KEYS)
+    bending = _support("shaft_bending", doc["shaft_bending"]) if "shaft_bending" in doc \
+        else None
+    stages_doc = doc["stages"]
+    if not isinstance(stages_doc, list) or not all(isinstance(s, dict) for s in stages_doc):
+        raise _err("stages", f"expected an array of tables [[stages]], got "
+                             f"{type(stages_doc).__name__} {stages_doc!r}")
+    stages, names, couplings = [], [], []
+    for k, st in enumerate(stages_doc):
+        path = f"stages[{k}]"
+        if "type" not in st:
+            raise _err(_join(path, "type"), "missing: required key (planetary or parallel)")
+        with _at("", ()):
+            kind = v.choice(_join(path, "type"), st["type"], STAGE_TYPES)
+        build = _planetary if kind == "planetary" else _parallel
+        stages.append(build(path, st, in_drivetrain=True))
+        name = st.get("name", f"stage{k + 1}")
+        with _at("", ()):
+            v.name(_join(path, "name"), name)
+        if name in names:
+            raise _err(_join(path, "name"), f"= {name!r}: already used by "
+                                            f"stages[{names.index(name)}]")
+        names.append(name)
+        if "coupling_stiffness" in st:
+            if k == 0:
+                raise _err(_join(path, "coupling_stiffness"), "not allowed on the first stage: "
+                           "it is coupled to the rotor by [main_shaft]")
+            couplings.append(st["coupling_stiffness"])
+        elif k > 0:
+            couplings.append(1e9)
+    generator = hss = None
+    if "generator" in doc:
+        generator = _body("generator", doc["generator"], "generator", "torsional")
+        if "hss_shaft" not in doc:
+            raise _err("hss_shaft", "missing section [hss_shaft] (stiffness in N m/rad), "
+                                    "required with [generator]")
+    if "hss_shaft" in doc:
+        if generator is None:
+            raise _err("hss_shaft", "given without [generator]")
+        hss = _table("hss_shaft", doc["hss_shaft"], _SHAFT_KEYS)
+    housing = suspension = None
+    if "housing" in doc:
+        housing = _body("housing", doc["housing"], "housing", "planar")
+        if "suspension" not in doc:
+            raise _err("suspension", "missing section [suspension] (stiffness table in N/m), "
+                                     "required with [housing]")
+    if "suspension" in doc:
+        if housing is None:
+            raise _err("suspension", "given without [housing]")
+        suspension = _support("suspension", doc["suspension"])
+    renames = [(r"^drivetrain(\.|$)", ""),
+               (r"^coupling(\d+)\.stiffness$", r"stages[\1].coupling_stiffness")]
+    with _at("", renames):
+        return builders.drivetrain(
+            rotor, stages, main_shaft_stiffness=shaft["stiffness"],
+            main_shaft_damping=shaft.get("damping", 0.0), couplings=couplings,
+            generator=generator, hss_stiffness=hss["stiffness"] if hss else None,
+            hss_damping=hss.get("damping", 0.0) if hss else 0.0, housing=housing,
+            suspension=suspension, shaft_bending=bending, stage_names=names)
+
+
+# -- document -------------------------------------------------------------------------------
+def _build(doc: dict, default_name: str | None) -> Model:
+    if "model" not in doc:
+        raise _err("model", "missing section [model] (with type = "
+                            + " | ".join(repr(t) for t in MODEL_TYPES) + ")")
+    meta = _table("model", doc["model"], _MODEL_KEYS)
+    with _at("", ()):
+        kind = v.choice("model.type", meta["type"], MODEL_TYPES)
+    sections = _SECTIONS[kind]
+    for key in doc:
+        if key not in sections:
+            raise _err(key, f"unknown section for type = {kind!r}; allowed: "
+                            + ", ".join(sections))
+    for key, required in sections.items():
+        if required and key not in doc:
+            raise _err(key, f"missing section [{key}] (required for type = {kind!r})")
+    name = meta.get("name", default_name or kind)
+    if not isinstance(name, str) or not name:
+        raise _err("model.name", f"= {name!r}: expected a non-empty string")
+    rated, span = _speeds(meta)
+
+    if kind == "drivetrain":
+        model = _drivetrain(doc)
+    elif kind == "gear_pair":
+        model = _gear_pair("gear_pair", doc["gear_pair"])
+    elif kind == "planetary_stage":
+        model = _planetary("planetary_stage", doc["planetary_stage"])
+    elif kind == "parallel_stage":
+        model = _parallel("parallel_stage", doc["parallel_stage"])
+    else:
+        model = _lin_parker("lin_parker_stage", doc["lin_parker_stage"])
+    model.name = name
+    model.rated_speed_rpm = rated
+    model.speed_range_rpm = span
+    with _at("", ()):
+        model.check()
+    return model
+
+
+def _speeds(meta: dict):
+    rated = span = None
+    with _at("", ()):
+        if "rated_speed_rpm" in meta:
+            rated = v.nonnegative("model.rated_speed_rpm", meta["rated_speed_rpm"], "rpm")
+        if "speed_range_rpm" in meta:
+            r = meta["speed_range_rpm"]
+            if not isinstance(r, list) or len(r) != 2:
+                raise _err("model.speed_range_rpm", f"= {r!r}: expected [low, high] in rpm")
+            lo = v.nonnegative("model.speed_range_rpm[0]", r[0], "rpm")
+            hi = v.nonnegative("model.speed_range_rpm[1]", r[1], "rpm")
+            if hi <= lo:
+                raise _err("model.speed_range_rpm", f"= {r!r}: high must exceed low")
+            span = (lo, hi)
+    if rated is not None and span is not None and not span[0] <= rated <= span[1]:
+        raise _err("model.rated_speed_rpm", f"= {rated!r}: outside speed_range_rpm "
+                                            f"[{span[0]:g}, {span[1]:g}]")
+    return rated, span
