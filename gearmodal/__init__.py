@@ -5,7 +5,9 @@ piecewise-linear contact model, modal and Campbell analysis. SI units throughout
 """
 
 from .assembly import Assembly, assemble
+from .campbell import CampbellResult, campbell
 from .errors import ModelError
+from .modal import ModalResult, modal
 from .model import (
     DOF_LEVELS,
     Bearing,
@@ -22,9 +24,11 @@ from .model import (
     parallel_stage,
     planetary_stage,
 )
+from .model.toml_io import load, loads
 
 __version__ = "0.1.0"
 
-__all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "Frame", "Gear", "Mesh", "Model",
-           "ModelError", "RigidBody", "Shaft", "assemble", "drivetrain", "gear_pair",
-           "lin_parker_stage", "parallel_stage", "planetary_stage"]
+__all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Frame", "Gear", "Mesh",
+           "ModalResult", "Model", "ModelError", "RigidBody", "Shaft", "assemble", "campbell",
+           "drivetrain", "gear_pair", "lin_parker_stage", "load", "loads", "modal",
+           "parallel_stage", "planetary_stage"]

@@ -3,13 +3,15 @@ matrices, contact gap functions as linear maps of the state, and load maps.
 
 The equations of motion at input speed ``Omega`` (rad/s) in contact state ``s`` are (DESIGN 2.1)::
 
-    M q'' + (C + C_s + Omega G) q' + (K + K_s + Omega^2 K_cent) q = B u + f_s + Omega^2 f_cent
+    M q'' + (C + C_s + Omega G) q' + (K + K_s + Omega^2 K_cent) q
+        = B u + f_s + Omega^2 f_cent
 
 Every contact (a flank of a mesh, one side of a bearing dead band) ``e`` has a penetration
 ``p_e = W[e] @ q - offset[e]`` and is active while ``p_e > 0``; then it pushes back with
 ``stiffness[e] * p_e + damping[e] * p_e'`` along ``-W[e]`` (DESIGN 2.2, 2.3), so::
 
-    K_s = sum_active k_e W_e^T W_e,  C_s = sum_active c_e W_e^T W_e,  f_s = sum_active k_e offset_e W_e
+    K_s = sum_active k_e W_e^T W_e,   C_s = sum_active c_e W_e^T W_e,
+    f_s = sum_active k_e offset_e W_e
 
 The kernels used here are generated from ``symbolic/`` (floating-frame wheel: ``wheel.py``;
 flank gaps: ``mesh.py``; joint/bearing deflections: ``joint.py``). Coefficients that rotate with a
@@ -58,6 +60,24 @@ class Contacts:
     def __len__(self) -> int:
         return len(self.element)
 
+    def index(self, element: str, contact: str) -> int:
+        """Row of the contact ``contact`` (``"front"``, ``"back"``, ``"x+"``...) of ``element``."""
+        for i, (e, c) in enumerate(zip(self.element, self.contact, strict=True)):
+            if e == element and c == contact:
+                return i
+        raise ModelError("contact", f"no contact {contact!r} on element {element!r}")
+
+    def mask(self, kind: str | None = None, contact: str | None = None) -> np.ndarray:
+        """Boolean mask of the contacts of a ``kind`` (mesh/bearing) and/or ``contact``."""
+        k = np.array(self.kind, dtype=object)
+        c = np.array(self.contact, dtype=object)
+        out = np.ones(len(self), dtype=bool)
+        if kind is not None:
+            out &= k == kind
+        if contact is not None:
+            out &= c == contact
+        return out
+
     def to_frame(self) -> pd.DataFrame:
         """One row per contact: element, contact, kind, offset_m, stiffness, damping, nominal."""
         return pd.DataFrame({"element": self.element, "contact": self.contact,
@@ -105,7 +125,8 @@ class Assembly:
             return self.contacts.nominal.copy()
         s = np.asarray(state, dtype=bool)
         if s.shape != (len(self.contacts),):
-            raise ModelError("state", f"expected {len(self.contacts)} booleans, got shape {s.shape}")
+            raise ModelError("state", f"expected {len(self.contacts)} booleans, "
+                                      f"got shape {s.shape}")
         return s
 
     def stiffness(self, state=None, speed: float = 0.0) -> np.ndarray:
@@ -235,7 +256,8 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
         if m.pressure_angle is not None:
             alpha = m.pressure_angle
         else:
-            alpha = b.transverse_pressure_angle if isinstance(b, Gear) else a.transverse_pressure_angle
+            g = b if isinstance(b, Gear) else a
+            alpha = g.transverse_pressure_angle
         if m.helix_angle is not None:
             beta_b = m.helix_angle
         else:

@@ -180,7 +180,7 @@ class CampbellResult:
             t = self.mode_types[len(s) // 2, j]
             ax.plot(s, f, color=colours[t], lw=1.3, label=t if t not in seen else None)
             seen.add(t)
-        for i, o in enumerate(names):
+        for _i, o in enumerate(names):
             ax.plot(s, self.orders[o] * s / 60.0, ls="--", lw=0.9, color="0.35")
             x = s.max()
             y = self.orders[o] * x / 60.0

@@ -12,4 +12,11 @@ class ModelError(ValueError):
 
     def __init__(self, field: str, message: str):
         self.field = field
-        super().__init__(f"{field}: {message}" if field else message)
+        self.message = message
+        if not field:
+            text = message
+        elif message.startswith("= "):
+            text = f"{field} {message}"  # "stage1.ring.teeth = 98: ..."
+        else:
+            text = f"{field}: {message}"
+        super().__init__(text)

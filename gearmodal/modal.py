@@ -173,7 +173,7 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     >>> p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
     >>> w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
     >>> res = gm.modal(gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4))
-    >>> [round(f, 1) for f in res.frequencies_hz]
+    >>> [round(float(f), 1) for f in res.frequencies_hz]
     [0.0, 2991.1]
     """
     speed_rpm = float(speed_rpm)
@@ -224,7 +224,7 @@ def energies(asm: Assembly, shapes: np.ndarray, freq_hz: np.ndarray, state=None)
     s = asm.state(state)
     elems = list(dict.fromkeys(c.element))
     se = np.zeros((n_modes, len(elems)))
-    for e, (name, active) in enumerate(zip(c.element, s)):
+    for e, (name, active) in enumerate(zip(c.element, s, strict=False)):
         if active:
             d = c.W[e] @ shapes
             se[:, elems.index(name)] += c.stiffness[e] * np.abs(d) ** 2

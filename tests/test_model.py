@@ -101,8 +101,8 @@ def test_radial_approach_closes_both_flanks():
     q[asm.dof_names.index("planet1.zeta")] = 1e-4  # outward, towards the ring
     p = asm.penetration(q) + asm.contacts.offset  # deflections d
     c = asm.contacts
-    idx = {(e, f): i for i, (e, f) in enumerate(zip(c.element, c.contact))}
-    d_front, d_back = p[idx["ring_planet1", "front"]], p[idx["ring_planet1", "back"]]
+    d_front = p[c.index("ring_planet1", "front")]
+    d_back = p[c.index("ring_planet1", "back")]
     assert d_front > 0 and d_back > 0
     assert d_front == pytest.approx(1e-4 * math.sin(math.radians(24.6)), rel=1e-12)
     assert d_back == pytest.approx(d_front, rel=1e-12)
@@ -122,7 +122,6 @@ def test_drivetrain_chains_ratios_and_names():
     q = np.linalg.solve(K, asm.load_vector({"rotor.torque": 2e5}))
     p = asm.penetration(q)
     c = asm.contacts
-    front = np.array([k == "mesh" and f == "front" for k, f in zip(c.kind, c.contact)])
-    back = np.array([k == "mesh" and f == "back" for k, f in zip(c.kind, c.contact)])
+    front, back = c.mask("mesh", "front"), c.mask("mesh", "back")
     assert np.all(p[front] > 0), np.array(c.element)[front][p[front] <= 0]
     assert np.all(p[back] < 0)

@@ -15,7 +15,7 @@ import math
 from ..errors import ModelError
 from . import validate as v
 from .components import DOF_LEVELS, Bearing, Frame, Gear, Mesh, RigidBody, Shaft
-from .model import GROUND, Model
+from .model import Model
 
 _CENTRAL = ("carrier", "ring", "sun")
 
@@ -55,8 +55,14 @@ def _support(field: str, spec, dofs: str) -> dict:
     if unknown:
         raise ModelError(f"{field}.{sorted(unknown)[0]}", "unknown key; allowed: stiffness, "
                                                           "damping, clearance")
-    return {"stiffness": dict(spec.get("stiffness", {})), "damping": dict(spec.get("damping", {})),
-            "clearance": dict(spec.get("clearance", {}))}
+    out = {}
+    for key in ("stiffness", "damping", "clearance"):
+        sub = spec.get(key, {})
+        if not isinstance(sub, dict):
+            raise ModelError(f"{field}.{key}", f"= {sub!r}: expected a table keyed by "
+                             "direction (x, y, z, rx, ry, theta)")
+        out[key] = dict(sub)
+    return out
 
 
 def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
@@ -105,7 +111,7 @@ def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
         for g in ("pinion", "wheel"):
             s = _support("gear_pair.bearing_stiffness", bearing_stiffness, dofs)
             m.add(Bearing(f"{g}_bearing", g, None, **s))
-    return m
+    return m.check()
 
 
 def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing: dict,
@@ -374,6 +380,9 @@ def drivetrain(rotor: RigidBody, stages: list, *, main_shaft_stiffness: float,
         raise ModelError(f"{name}.stage_names", "one name per stage")
     if couplings is None or not isinstance(couplings, (list, tuple)):
         couplings = [couplings if couplings is not None else 1e9] * (len(stages) - 1)
+    if len(couplings) != len(stages) - 1:
+        raise ModelError(f"{name}.couplings", f"gives {len(couplings)} stiffnesses for "
+                         f"{len(stages) - 1} couplings between {len(stages)} stages")
     m = Model(name, input="rotor")
     rot = copy.deepcopy(rotor)
     rot.name = rot.name or "rotor"

@@ -8,7 +8,6 @@ built by stage builders are merged into drivetrains under a prefix (``"stage1.su
 from __future__ import annotations
 
 import copy
-from dataclasses import replace
 
 from ..errors import ModelError
 from .components import LEVEL_INDICES, Bearing, Body, Frame, Mesh
@@ -80,9 +79,12 @@ class Model:
         def p(n):
             return f"{prefix}.{n}" if n else n
 
+        # copies keep the validated fields; constructors would re-check the dotted names
         for fr in other.frames.values():
             if fr.name != GROUND:
-                self.add(Frame(p(fr.name), fr.speed_ratio))
+                nf = copy.copy(fr)
+                nf.name = p(fr.name)
+                self.add(nf)
         for b in other.bodies.values():
             nb = copy.copy(b)
             nb.name = p(b.name)
@@ -90,17 +92,18 @@ class Model:
             nb.coordinate_names = dict(b.coordinate_names)
             self.bodies[self._free(nb.name)] = nb
         for m in other.meshes.values():
-            self.meshes[self._free(p(m.name))] = replace(m, name=p(m.name), gear_a=p(m.gear_a),
-                                                         gear_b=p(m.gear_b))
+            nm = copy.copy(m)
+            nm.name, nm.gear_a, nm.gear_b = p(m.name), p(m.gear_a), p(m.gear_b)
+            self.meshes[self._free(nm.name)] = nm
         for br in other.bearings.values():
-            b = p(br.b) if br.b is not None else ground
-            af = br.axes_frame
-            if af is not None and af != GROUND:
-                af = p(af)
-            self.bearings[self._free(p(br.name))] = replace(
-                br, name=p(br.name), a=p(br.a), b=b, axes_frame=af,
-                stiffness=dict(br.stiffness), damping=dict(br.damping),
-                clearance=dict(br.clearance))
+            nb = copy.copy(br)
+            nb.name, nb.a = p(br.name), p(br.a)
+            nb.b = p(br.b) if br.b is not None else ground
+            if br.axes_frame is not None and br.axes_frame != GROUND:
+                nb.axes_frame = p(br.axes_frame)
+            nb.stiffness, nb.damping = dict(br.stiffness), dict(br.damping)
+            nb.clearance = dict(br.clearance)
+            self.bearings[self._free(nb.name)] = nb
         for g, members in other.groups.items():
             self.groups[p(g)] = [p(m) for m in members]
         return self

@@ -328,9 +328,7 @@ def _syntax_message(e: tomllib.TOMLDecodeError) -> str:
 
 
 def _message(err: ModelError) -> str:
-    text = str(err)
-    return text[len(err.field) + 2:] if err.field and text.startswith(err.field + ": ") \
-        else text
+    return getattr(err, "message", str(err))
 
 
 def _err(field: str, message: str) -> ModelError:
