@@ -12,8 +12,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-#: share of kinetic energy below which a DOF group counts as at rest
+#: share of kinetic energy below which a DOF group counts as at rest (exact structure)
 QUIET = 1e-6
+#: share below which a group counts as at rest in a coupled drivetrain (approximate structure)
+LOOSE = 0.1
 
 
 def dof_energy(asm, shapes: np.ndarray) -> np.ndarray:
@@ -23,13 +25,27 @@ def dof_energy(asm, shapes: np.ndarray) -> np.ndarray:
     return np.divide(e, tot, out=np.zeros_like(e), where=tot > 0)
 
 
-def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e-6) -> list[str]:
+def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e-6,
+             K: np.ndarray | None = None) -> list[str]:
     """Label each mode (column of ``shapes``) by where its kinetic energy sits.
 
-    A mode is ``rigid`` when its frequency is below ``rigid_rel`` times the highest one (the
-    eigen-solver resolves a zero frequency only to about sqrt(eps) of the spectrum's width).
+    Rules, in order: ``rigid`` when the shape is (numerically) in the null space of the static
+    stiffness ``K`` (default: nominal contact state, no speed terms): its stiffness Rayleigh
+    quotient, as a frequency, is below ``rigid_rel`` times the highest frequency (the
+    eigen-solver resolves a zero frequency only to about sqrt(eps) of the spectrum's width; a
+    rigid rotation stays rigid when Lin & Parker's centripetal term lifts it off zero).
+    ``housing`` when the housing holds over half the kinetic energy. For a planetary stage
+    holding over half of it: Lin & Parker's exact tests (central members at rest: ``planet``;
+    central members not translating: ``rotational``; not rotating: ``translational``), then
+    the same tests with a loose tolerance (``LOOSE`` of the stage's energy) for coupled
+    drivetrains. Else ``torsional`` when rotational coordinates hold over 90 %, else ``mixed``.
     """
-    rigid_hz = rigid_rel * float(np.max(freq_hz)) if len(freq_hz) else 0.0
+    fmax = float(np.max(freq_hz)) if len(freq_hz) else 0.0
+    if K is None:
+        K = asm.stiffness()
+    num = np.real(np.einsum("im,ij,jm->m", shapes.conj(), K, shapes))
+    den = np.real(np.einsum("im,ij,jm->m", shapes.conj(), asm.M, shapes))
+    static_hz = np.sqrt(np.clip(num / den, 0, None)) / (2 * np.pi)
     names = asm.dof_names
     e = dof_energy(asm, shapes)
     rot = np.array([n.rsplit(".", 1)[1] in ("theta", "u") for n in names])
@@ -45,7 +61,7 @@ def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e
     types = []
     for m in range(shapes.shape[1]):
         em = e[:, m]
-        if freq_hz[m] < rigid_hz:
+        if static_hz[m] < rigid_rel * fmax:
             types.append("rigid")
             continue
         if housing.any() and em[housing].sum() > 0.5:
@@ -64,6 +80,16 @@ def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e
                     types.append("rotational")
                     continue
                 if em[c & rot].sum() < QUIET * em[c].sum() + QUIET:
+                    types.append("translational")
+                    continue
+                stage_e = em[c | p].sum()
+                if em[c].sum() < LOOSE * stage_e:
+                    types.append("planet")
+                    continue
+                if em[c & ~rot].sum() < LOOSE * em[c].sum():
+                    types.append("rotational")
+                    continue
+                if em[c & rot].sum() < LOOSE * em[c].sum():
                     types.append("translational")
                     continue
         if em[rot].sum() > 0.9:

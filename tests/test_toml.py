@@ -63,7 +63,7 @@ def test_600kw_ratio_speeds_and_units(model_600kw):
     assert m.gear_ratio == pytest.approx((1 + 99 / 21) * (82 / 23) * (88 / 22), rel=1e-12)
     assert m.gear_ratio == pytest.approx(81.49, abs=0.01)
     assert m.rated_speed_rpm == pytest.approx(22.1)
-    assert m.speed_range_rpm == (0.0, 25.0)
+    assert m.speed_range_rpm == (22.0, 22.6)
     sun = m.bodies["stage1.sun"]
     assert (sun.teeth, sun.module) == (21, 0.010)
     assert sun.pressure_angle == DEG(20.0)  # degrees in the TOML, radians in the API

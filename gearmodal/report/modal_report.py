@@ -18,6 +18,8 @@ from ..modal import ModalResult  # noqa: E402
 
 #: number of (non-rigid) lowest modes that get a mode-shape figure
 N_SHAPES = 6
+#: upper frequency of the low-frequency Campbell zoom (raised to 3x the lowest housing mode)
+LOW_FMAX_HZ = 40.0
 
 
 def _png(fig, path: Path) -> str:
@@ -84,8 +86,21 @@ def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
     res.save(out)
     fig = camp.plot()
     cpng = _png(fig, out / "campbell.png")
+    low_orders = [o for o in camp.orders if o in ("1P", "3P") or "planet pass" in o
+                  or (o.endswith("mesh") and not o.startswith("2x"))]
+    housing = res.frequencies_hz[[t == "housing" for t in res.mode_types]]
+    f_low = LOW_FMAX_HZ if not len(housing) else max(LOW_FMAX_HZ, 3.0 * float(housing.min()))
+    fig = camp.plot(fmax_hz=f_low, orders=low_orders)
+    lpng = _png(fig, out / "campbell_low.png")
     figs = _shape_figures(res, out)
     cr = camp.crossings()
+    hmodes = sorted({int(j) for j in range(camp.n_modes)
+                     if (camp.mode_types[:, j] == "housing").any()})
+    hcr = cr[cr["mode"].isin(hmodes)]
+    htab = pd.DataFrame({"mode": hmodes,
+                         "frequency_hz_at_rated": [camp.frequencies_hz[
+                             int(abs(camp.speeds_rpm - res.speed_rpm).argmin()), j]
+                             for j in hmodes]})
     modes = res.to_frame()
     rng = camp.speed_range_rpm
     rng_txt = f"{rng[0]:g}-{rng[1]:g} rpm" if rng else "the whole sweep"
@@ -95,6 +110,14 @@ def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
             f"({len(camp.speeds_rpm)} speeds); operating range {rng_txt}. Modes tracked by "
             "mass-weighted MAC with one-to-one assignment.</p>",
             f"<img alt='campbell' src='data:image/png;base64,{cpng}'>",
+            "<h2>Low-frequency zoom: rotor orders and the gearbox housing modes</h2>",
+            f"<img alt='campbell_low' src='data:image/png;base64,{lpng}'>",
+            "<h3>Gearbox housing modes (housing on its suspension)</h3>",
+            _table(htab) if len(htab) else "<p>no housing modes in this model</p>",
+            "<p>Crossings of the housing modes with every order over the sweep "
+            "(highlighted: inside the operating range):</p>",
+            _table(hcr, highlight=hcr.in_operating_range) if len(hcr) else
+            "<p>no order crosses a housing mode within the sweep</p>",
             "<h2>Excitation orders</h2>",
             _table(pd.DataFrame({"order": list(camp.orders),
                                  "per_revolution": list(camp.orders.values())})),
