@@ -8,7 +8,7 @@ angles, which are given in **degrees** in keys ending in ``_deg`` (``pressure_an
 Speeds are in rpm of the input (rotor, carrier or pinion).
 
 Every error is a :class:`~gearmodal.errors.ModelError` whose ``field`` is the full dotted TOML
-path of the offending key, e.g. ``stages[0].ring.teeth: = 98: ring teeth must equal sun + 2 *
+path of the offending key, e.g. ``stages[0].ring.teeth = 98: ring teeth must equal sun + 2 *
 planet (21 + 2 * 39 = 99)``; when loading a file the message ends with ``(in <file>)``. The
 range checks are the components' and builders' own; this module checks the document's shape
 (tables, unknown and missing keys, degree values) and renames the builders' field names to the
