@@ -25,10 +25,11 @@ from .model import (
     planetary_stage,
 )
 from .model.toml_io import load, loads
+from .static import Equilibrium, balance, equilibrium
 
 __version__ = "0.1.0"
 
-__all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Frame", "Gear", "Mesh",
-           "ModalResult", "Model", "ModelError", "RigidBody", "Shaft", "assemble", "campbell",
-           "drivetrain", "gear_pair", "lin_parker_stage", "load", "loads", "modal",
-           "parallel_stage", "planetary_stage"]
+__all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Equilibrium", "Frame",
+           "Gear", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
+           "assemble", "balance", "campbell", "drivetrain", "equilibrium", "gear_pair",
+           "lin_parker_stage", "load", "loads", "modal", "parallel_stage", "planetary_stage"]

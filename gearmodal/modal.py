@@ -39,7 +39,10 @@ class ModalResult:
     dof_names : names of the rows of ``shapes``.
     kinetic_energy, strain_energy : DataFrames (modes x bodies / elements) with each mode's
         share of kinetic energy per body and of strain energy per spring element (rows sum to 1).
-    mode_types : label per mode (see :func:`classify`); ``labels`` overrides by mode index.
+    mode_types : label per mode (see :func:`gearmodal.modetypes.classify`); ``labels``
+        overrides by mode index.
+    equilibrium : the static equilibrium (:class:`gearmodal.static.Equilibrium`) when loads
+        were given, else None. contact_state : the contact states the modes belong to.
     """
 
     speed_rpm: float
@@ -51,6 +54,8 @@ class ModalResult:
     strain_energy: pd.DataFrame
     mode_types: list = field(default_factory=list)
     model_name: str = ""
+    equilibrium: object = None
+    contact_state: np.ndarray | None = None
 
     @property
     def n_modes(self) -> int:
@@ -162,9 +167,11 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     ----------
     model : a :class:`gearmodal.Model` (or an already assembled :class:`Assembly`).
     speed_rpm : input speed in rpm (gyroscopic and centripetal terms scale with it).
-    loads : not yet supported here (static equilibrium under load comes with the modal
-        report issue); pass ``state`` to pick a contact state explicitly.
-    state : contact-state booleans (default: nominal state).
+    loads : ``{load name: value}`` (N, N m). When given, the static equilibrium under these
+        loads (and the centrifugal forces at ``speed_rpm``) is solved first and the modes are
+        those of its contact state (see :func:`gearmodal.static.equilibrium`); it is kept in
+        ``result.equilibrium``. The loads must be balanced (:func:`gearmodal.static.balance`).
+    state : contact-state booleans (default: nominal state, or the loaded one).
     labels : ``{mode index: label}`` overriding the automatic mode types.
 
     Examples
@@ -179,11 +186,14 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     speed_rpm = float(speed_rpm)
     if not math.isfinite(speed_rpm) or speed_rpm < 0:
         raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number >= 0 rpm")
-    if loads:
-        raise ModelError("loads", "static equilibrium under load is not implemented yet; "
-                         "give the contact state with state=...")
     asm, name = _as_assembly(model)
     om = speed_rpm * RPM
+    eq = None
+    if loads:
+        from .static import equilibrium
+
+        eq = equilibrium(asm, loads, speed_rpm, state=state)
+        state = eq.state
     s = asm.state(state)
     K = asm.stiffness(s)
     C = asm.damping(s)
@@ -197,12 +207,13 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     shapes = shapes / shapes[big, np.arange(shapes.shape[1])]
     ke, se = energies(asm, shapes, freq, s)
     from .modetypes import classify
-    types = classify(asm, shapes, freq)
+    types = classify(asm, shapes, freq, K=asm.stiffness(s))
     for i, lab in (labels or {}).items():
         types[int(i)] = str(lab)
     return ModalResult(speed_rpm=speed_rpm, frequencies_hz=freq, damping_ratios=zeta,
                        shapes=shapes, dof_names=list(asm.dof_names), kinetic_energy=ke,
-                       strain_energy=se, mode_types=types, model_name=name)
+                       strain_energy=se, mode_types=types, model_name=name,
+                       equilibrium=eq, contact_state=s)
 
 
 def energies(asm: Assembly, shapes: np.ndarray, freq_hz: np.ndarray, state=None):
