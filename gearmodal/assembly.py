@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import ModelError
-from .kernels.joint import joint_gradients
+from .kernels.joint import bearing_gap_jacobians, joint_gradients
 from .kernels.mesh import mesh_gap_jacobian
 from .kernels.wheel import (
     wheel_centrifugal_force,
@@ -286,22 +286,28 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
         axes_frame = br.axes_frame or (b.frame if b is not None else GROUND)
         gamma = model.frames[axes_frame].speed_ratio * azimuth + br.axes_angle
         Ga, Gb = joint_gradients(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2], gamma)
+        Ja, Jb = bearing_gap_jacobians(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2], gamma)
         for key, k in br.stiffness.items():
             i = DIRECTIONS.index(key)
-            w = np.zeros(n)
-            w[slices[a.name]] += Ga[i] @ T[a.name]
-            if b is not None:
-                w[slices[b.name]] += Gb[i] @ T[b.name]
-            if not np.any(w):
-                continue  # the direction acts on no DOF present at these levels
             c = br.damping.get(key, 0.0)
             gap = br.clearance.get(key, 0.0)
             if gap == 0.0:
+                # no dead band: a linear spring on the joint deflection g_i
+                w = np.zeros(n)
+                w[slices[a.name]] += Ga[i] @ T[a.name]
+                if b is not None:
+                    w[slices[b.name]] += Gb[i] @ T[b.name]
                 K += k * np.outer(w, w)
                 C += c * np.outer(w, w)
-            else:
-                add_contact(w, gap, k, c, True, br.name, f"{key}+", "bearing")
-                add_contact(-w, gap, k, c, False, br.name, f"{key}-", "bearing")
+                continue
+            for j, side in ((2 * i, "+"), (2 * i + 1, "-")):
+                w = np.zeros(n)
+                w[slices[a.name]] += Ja[j] @ T[a.name]
+                if b is not None:
+                    w[slices[b.name]] += Jb[j] @ T[b.name]
+                if np.any(w):  # else the direction acts on no DOF present at these levels
+                    add_contact(w, gap, k, c, side == "+", br.name, f"{key}{side}",
+                                "bearing")
 
     # Loads by name: generalised force of a unit force/moment at the body centre.
     load_names, cols = [], []

@@ -10,6 +10,15 @@ body displacements ``q = (ux, uy, uz, rx, ry, rz)`` (global axes, exact rotation
 the relative translation of the two points in joint axes (exact) and the relative small
 rotation. ``G_a = dg/dq_a``, ``G_b = dg/dq_b`` at ``q = 0`` are the constraint gradients of the
 Lagrange-multiplier coupling ``B + G^T lambda = 0, g = 0`` (DESIGN 2.5).
+
+A bearing is the same joint made compliant, with a dead band per direction (DESIGN 2.3): with
+clearance ``c_i`` (free play on each side) direction ``i`` has the two gap functions (positive =
+penetration, the side is in contact)
+
+    p_i+ = g_i - c_i,    p_i- = -g_i - c_i,
+
+ordered ``x+, x-, y+, y-, z+, z-, rx+, rx-, ry+, ry-, theta+, theta-``, with Jacobians
+``d p / d q_a``, ``d p / d q_b`` at ``q = 0``.
 """
 
 from __future__ import annotations
@@ -24,6 +33,7 @@ DESCRIPTION = "Joint/bearing constraint (DESIGN 2.3, 2.5): exact residual g and 
 
 pax, pay, paz, pbx, pby, pbz = sp.symbols("pax pay paz pbx pby pbz", real=True)
 gamma = sp.Symbol("gamma", real=True)
+CLEAR = sp.symbols("cx cy cz crx cry ctheta", real=True)
 
 QA = sp.symbols("uax uay uaz rax ray raz", real=True)
 QB = sp.symbols("ubx uby ubz rbx rby rbz", real=True)
@@ -52,7 +62,10 @@ def derive() -> dict[str, sp.Matrix]:
     zero = dict.fromkeys(QA + QB, 0)
     Ga = g.jacobian(QA).subs(zero)
     Gb = g.jacobian(QB).subs(zero)
-    return {"g": g, "Ga": Ga, "Gb": Gb}
+    gaps = sp.Matrix([sign * g[i] - CLEAR[i] for i in range(6) for sign in (1, -1)])
+    Ja = gaps.jacobian(QA).subs(zero)
+    Jb = gaps.jacobian(QB).subs(zero)
+    return {"g": g, "Ga": Ga, "Gb": Gb, "gaps": gaps, "Ja": Ja, "Jb": Jb}
 
 
 def kernels() -> list[Kernel]:
@@ -76,6 +89,22 @@ def kernels() -> list[Kernel]:
             "Constraint gradients (Ga, Gb), each (6, 6): dg/dq_a and dg/dq_b at q = 0 "
             "(DESIGN 2.5).",
             output_names=["Ga", "Gb"],
+        ),
+        Kernel(
+            "bearing_gaps",
+            [qa, qb, *geo, *(ScalarArg(c, f"clearance of direction {c.name[1:]} (m or rad)")
+                             for c in CLEAR)],
+            [d["gaps"]],
+            "Dead-band gap functions (12,) of a bearing, positive = that side in contact: "
+            "x+, x-, y+, y-, z+, z-, rx+, rx-, ry+, ry-, theta+, theta- (DESIGN 2.3).",
+        ),
+        Kernel(
+            "bearing_gap_jacobians",
+            geo,
+            [d["Ja"], d["Jb"]],
+            "Jacobians (Ja, Jb), each (12, 6), of the bearing gap functions at q = 0 "
+            "(DESIGN 2.3).",
+            output_names=["Ja", "Jb"],
         ),
     ]
 

@@ -394,3 +394,28 @@ def test_joint_residual_is_exact() -> None:
     dpb = qb[:3] + (_rs(qb[3:]) - np.eye(3)) @ pb
     expected = np.r_[E.T @ (dpa - dpb), E.T @ (qa[3:] - qb[3:])]
     np.testing.assert_allclose(joint.joint_residual(qa, qb, *pa, *pb, gamma), expected, atol=1e-14)
+
+
+@pytest.mark.parametrize("geo", JOINT_GEOMETRIES)
+def test_bearing_gaps_dead_band_and_jacobians(geo) -> None:
+    """Dead band (DESIGN 2.3): p_i+ = g_i - c_i, p_i- = -g_i - c_i; Jacobians by central
+    differences (same error budget as the joint check)."""
+    rng = np.random.default_rng(11)
+    clear = np.abs(rng.standard_normal(6)) * 1e-4
+    qa, qb = rng.standard_normal(6) * 1e-3, rng.standard_normal(6) * 1e-3
+    g = joint.joint_residual(qa, qb, *geo)
+    p = joint.bearing_gaps(qa, qb, *geo, *clear)
+    np.testing.assert_allclose(p[0::2], g - clear, atol=1e-15)
+    np.testing.assert_allclose(p[1::2], -g - clear, atol=1e-15)
+    Ja, Jb = joint.bearing_gap_jacobians(*geo)
+    h, zero = 1e-6, np.zeros(6)
+    for J, which in ((Ja, 0), (Jb, 1)):
+        fd = np.zeros((12, 6))
+        for k in range(6):
+            dq = np.zeros(6)
+            dq[k] = h
+            a_p = (dq, zero) if which == 0 else (zero, dq)
+            a_m = (-dq, zero) if which == 0 else (zero, -dq)
+            fd[:, k] = (joint.bearing_gaps(*a_p, *geo, *clear)
+                        - joint.bearing_gaps(*a_m, *geo, *clear)) / (2 * h)
+        np.testing.assert_allclose(J, fd, rtol=0, atol=1e-8)

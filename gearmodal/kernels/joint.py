@@ -7,7 +7,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ['joint_residual', 'joint_gradients']
+__all__ = ['joint_residual', 'joint_gradients', 'bearing_gaps', 'bearing_gap_jacobians']
 
 
 @numba.njit(cache=True)
@@ -131,3 +131,194 @@ def joint_gradients(pax, pay, paz, pbx, pby, pbz, gamma):
     Gb[4, 4] = x5
     Gb[5, 5] = -1
     return Ga, Gb
+
+
+@numba.njit(cache=True)
+def bearing_gaps(qa, qb, pax, pay, paz, pbx, pby, pbz, gamma, cx, cy, cz, crx, cry, ctheta):
+    """Dead-band gap functions (12,) of a bearing, positive = that side in contact: x+, x-, y+, y-, z+, z-, rx+, rx-, ry+, ry-, theta+, theta- (DESIGN 2.3).
+
+    Arguments:
+        qa: displacements of a (ux, uy, uz, rx, ry, rz), global axes
+        qb: displacements of b (ux, uy, uz, rx, ry, rz), global axes
+        pax: x of the offset from a's centre to the joint point (global axes)
+        pay: y of the offset from a's centre
+        paz: z of the offset from a's centre
+        pbx: x of the offset from b's centre to the joint point
+        pby: y of the offset from b's centre
+        pbz: z of the offset from b's centre
+        gamma: joint axes angle: e1 = Rz(gamma) x_hat, e2 = Rz(gamma) y_hat, e3 = z_hat
+        cx: clearance of direction x (m or rad)
+        cy: clearance of direction y (m or rad)
+        cz: clearance of direction z (m or rad)
+        crx: clearance of direction rx (m or rad)
+        cry: clearance of direction ry (m or rad)
+        ctheta: clearance of direction theta (m or rad)
+    """
+    uax = qa[0]
+    uay = qa[1]
+    uaz = qa[2]
+    rax = qa[3]
+    ray = qa[4]
+    raz = qa[5]
+    ubx = qb[0]
+    uby = qb[1]
+    ubz = qb[2]
+    rbx = qb[3]
+    rby = qb[4]
+    rbz = qb[5]
+    x0 = math.cos(gamma)
+    x1 = math.sin(ray)
+    x2 = math.sin(rby)
+    x3 = math.sin(rbz)
+    x4 = math.cos(rby)
+    x5 = math.sin(raz)
+    x6 = math.cos(ray)
+    x7 = math.cos(raz)
+    x8 = math.cos(rbz)
+    x9 = pax*(x6*x7 - 1) - pay*x5*x6 + paz*x1 - pbx*(x4*x8 - 1) + pby*x3*x4 - pbz*x2 + uax - ubx
+    x10 = math.sin(gamma)
+    x11 = math.sin(rbx)
+    x12 = math.sin(rax)
+    x13 = math.cos(rax)
+    x14 = x13*x5
+    x15 = x12*x7
+    x16 = math.cos(rbx)
+    x17 = x16*x3
+    x18 = x11*x8
+    x19 = x12*x5
+    x20 = x11*x3
+    x21 = pax*(x1*x15 + x14) + pay*(-x1*x19 + x13*x7 - 1) - paz*x12*x6 - pbx*(x17 + x18*x2) - pby*(x16*x8 - x2*x20 - 1) + pbz*x11*x4 + uay - uby
+    x22 = x0*x9 + x10*x21
+    x23 = x10*x9
+    x24 = x0*x21
+    x25 = pbz*(x16*x4 - 1)
+    x26 = paz*(x13*x6 - 1)
+    x27 = pby*(x17*x2 + x18)
+    x28 = pay*(x1*x14 + x15)
+    x29 = pbx*(-x16*x2*x8 + x20)
+    x30 = pax*(-x1*x13*x7 + x19)
+    x31 = rax - rbx
+    x32 = ray - rby
+    x33 = x0*x31 + x10*x32
+    x34 = x10*x31
+    x35 = x0*x32
+    out = np.zeros((12,))
+    out[0] = -cx + x22
+    out[1] = -cx - x22
+    out[2] = -cy - x23 + x24
+    out[3] = -cy + x23 - x24
+    out[4] = -cz + uaz - ubz - x25 + x26 - x27 + x28 - x29 + x30
+    out[5] = -cz - uaz + ubz + x25 - x26 + x27 - x28 + x29 - x30
+    out[6] = -crx + x33
+    out[7] = -crx - x33
+    out[8] = -cry - x34 + x35
+    out[9] = -cry + x34 - x35
+    out[10] = -ctheta + raz - rbz
+    out[11] = -ctheta - raz + rbz
+    return out
+
+
+@numba.njit(cache=True)
+def bearing_gap_jacobians(pax, pay, paz, pbx, pby, pbz, gamma):
+    """Jacobians (Ja, Jb), each (12, 6), of the bearing gap functions at q = 0 (DESIGN 2.3).
+
+    Arguments:
+        pax: x of the offset from a's centre to the joint point (global axes)
+        pay: y of the offset from a's centre
+        paz: z of the offset from a's centre
+        pbx: x of the offset from b's centre to the joint point
+        pby: y of the offset from b's centre
+        pbz: z of the offset from b's centre
+        gamma: joint axes angle: e1 = Rz(gamma) x_hat, e2 = Rz(gamma) y_hat, e3 = z_hat
+    """
+    x0 = math.cos(gamma)
+    x1 = math.sin(gamma)
+    x2 = paz*x1
+    x3 = -x2
+    x4 = paz*x0
+    x5 = pax*x1 - pay*x0
+    x6 = -x0
+    x7 = -x1
+    x8 = -x4
+    x9 = pax*x0 + pay*x1
+    x10 = pbz*x1
+    x11 = pbz*x0
+    x12 = -x11
+    x13 = pbx*x1 - pby*x0
+    x14 = -x10
+    x15 = pbx*x0 + pby*x1
+    Ja = np.zeros((12, 6))
+    Ja[0, 0] = x0
+    Ja[0, 1] = x1
+    Ja[0, 3] = x3
+    Ja[0, 4] = x4
+    Ja[0, 5] = x5
+    Ja[1, 0] = x6
+    Ja[1, 1] = x7
+    Ja[1, 3] = x2
+    Ja[1, 4] = x8
+    Ja[1, 5] = -x5
+    Ja[2, 0] = x7
+    Ja[2, 1] = x0
+    Ja[2, 3] = x8
+    Ja[2, 4] = x3
+    Ja[2, 5] = x9
+    Ja[3, 0] = x1
+    Ja[3, 1] = x6
+    Ja[3, 3] = x4
+    Ja[3, 4] = x2
+    Ja[3, 5] = -x9
+    Ja[4, 2] = 1
+    Ja[4, 3] = pay
+    Ja[4, 4] = -pax
+    Ja[5, 2] = -1
+    Ja[5, 3] = -pay
+    Ja[5, 4] = pax
+    Ja[6, 3] = x0
+    Ja[6, 4] = x1
+    Ja[7, 3] = x6
+    Ja[7, 4] = x7
+    Ja[8, 3] = x7
+    Ja[8, 4] = x0
+    Ja[9, 3] = x1
+    Ja[9, 4] = x6
+    Ja[10, 5] = 1
+    Ja[11, 5] = -1
+    Jb = np.zeros((12, 6))
+    Jb[0, 0] = x6
+    Jb[0, 1] = x7
+    Jb[0, 3] = x10
+    Jb[0, 4] = x12
+    Jb[0, 5] = -x13
+    Jb[1, 0] = x0
+    Jb[1, 1] = x1
+    Jb[1, 3] = x14
+    Jb[1, 4] = x11
+    Jb[1, 5] = x13
+    Jb[2, 0] = x1
+    Jb[2, 1] = x6
+    Jb[2, 3] = x11
+    Jb[2, 4] = x10
+    Jb[2, 5] = -x15
+    Jb[3, 0] = x7
+    Jb[3, 1] = x0
+    Jb[3, 3] = x12
+    Jb[3, 4] = x14
+    Jb[3, 5] = x15
+    Jb[4, 2] = -1
+    Jb[4, 3] = -pby
+    Jb[4, 4] = pbx
+    Jb[5, 2] = 1
+    Jb[5, 3] = pby
+    Jb[5, 4] = -pbx
+    Jb[6, 3] = x6
+    Jb[6, 4] = x7
+    Jb[7, 3] = x0
+    Jb[7, 4] = x1
+    Jb[8, 3] = x1
+    Jb[8, 4] = x6
+    Jb[9, 3] = x7
+    Jb[9, 4] = x0
+    Jb[10, 5] = -1
+    Jb[11, 5] = 1
+    return Ja, Jb
