@@ -113,6 +113,7 @@ class Assembly:
     contacts: Contacts
     azimuth: float = 0.0
     body_slices: dict = field(default_factory=dict)
+    springs: Contacts | None = None
 
     @property
     def n(self) -> int:
@@ -231,6 +232,7 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     K = np.zeros((n, n))
     C = np.zeros((n, n))
     rows, offs, ks, cs, noms, elems, labels, kinds = [], [], [], [], [], [], [], []
+    lin_rows, lin_k, lin_c, lin_elem, lin_dir = [], [], [], [], []
 
     def add_contact(w, off, k, c, nominal, elem, label, kind):
         rows.append(w)
@@ -299,6 +301,12 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
                     w[slices[b.name]] += Gb[i] @ T[b.name]
                 K += k * np.outer(w, w)
                 C += c * np.outer(w, w)
+                if np.any(w):
+                    lin_rows.append(w)
+                    lin_k.append(k)
+                    lin_c.append(c)
+                    lin_elem.append(br.name)
+                    lin_dir.append(key)
                 continue
             for j, side in ((2 * i, "+"), (2 * i + 1, "-")):
                 w = np.zeros(n)
@@ -327,6 +335,12 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
         W=np.array(rows) if nc else np.zeros((0, n)),
         offset=np.array(offs, dtype=float), stiffness=np.array(ks, dtype=float),
         damping=np.array(cs, dtype=float), nominal=np.array(noms, dtype=bool))
+    nl = len(lin_rows)
+    springs = Contacts(
+        element=lin_elem, contact=lin_dir, kind=["spring"] * nl,
+        W=np.array(lin_rows) if nl else np.zeros((0, n)), offset=np.zeros(nl),
+        stiffness=np.array(lin_k, dtype=float), damping=np.array(lin_c, dtype=float),
+        nominal=np.ones(nl, dtype=bool))
     return Assembly(dof_names=model.dof_names, load_names=load_names, M=M, C=C, K=K, G=G,
                     K_cent=Kc, f_cent=fc, B=B, contacts=contacts, azimuth=azimuth,
-                    body_slices=slices)
+                    body_slices=slices, springs=springs)

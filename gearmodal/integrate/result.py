@@ -1,0 +1,185 @@
+"""``SimulationResult``: time series, contact forces, the contact-state event log and the
+double-contact and load-sharing analyses built on it."""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+EVENT_COLUMNS = ["time", "element", "contact", "state_before", "state_after", "gap_rate",
+                 "force_after"]
+
+
+def _planet_of(element: str) -> str:
+    m = re.search(r"(planet\d+)", element)
+    return m.group(1) if m else ""
+
+
+def _stage_of(element: str) -> str:
+    return element.rsplit(".", 1)[0] if "." in element else ""
+
+
+@dataclass
+class SimulationResult:
+    """Result of :func:`gearmodal.simulate`.
+
+    Attributes
+    ----------
+    t : (n_times,) output times, s.
+    q, v : DataFrames of displacements (m, rad) and velocities by DOF name, indexed by time.
+    forces : DataFrame indexed by time: ``<mesh>.front`` / ``<mesh>.back`` flank forces (N)
+        and ``<bearing>.<direction>`` bearing forces (N or N m; per-axis dead bands combined,
+        positive when the bearing pushes body a towards the negative direction).
+    events : the contact-state event log, one row per change: ``time`` (s), ``element``,
+        ``contact`` (``front``/``back`` flank, bearing side ``x+``...), ``state_before``,
+        ``state_after`` (``open``/``closed``), ``gap_rate`` (m/s, penetration rate at the
+        switch), ``force_after`` (N, the contact force just after the switch).
+    contact_state : DataFrame of booleans (closed) per contact at the output times.
+    settings : the settings that made the run (method, dt, options).
+    """
+
+    t: np.ndarray
+    q: pd.DataFrame
+    v: pd.DataFrame
+    forces: pd.DataFrame
+    events: pd.DataFrame
+    contact_state: pd.DataFrame
+    settings: dict = field(default_factory=dict)
+    initial_state: dict = field(default_factory=dict)
+    stats: dict = field(default_factory=dict)
+
+    # -- contact intervals ---------------------------------------------------------------
+    def _intervals(self) -> dict[str, list[tuple[float, float]]]:
+        """Closed intervals of every contact from the exact event times."""
+        t0, t1 = float(self.t[0]), float(self.t[-1])
+        out: dict[str, list] = {}
+        state = dict(self.initial_state)
+        start = {k: t0 for k, v in state.items() if v}
+        for row in self.events.itertuples(index=False):
+            key = f"{row.element}:{row.contact}"
+            if row.state_after == "closed":
+                start[key] = row.time
+            elif key in start:
+                out.setdefault(key, []).append((start.pop(key), row.time))
+        for key, s in start.items():
+            out.setdefault(key, []).append((s, t1))
+        return out
+
+    def double_contact(self) -> pd.DataFrame:
+        """Episodes with both flanks of a mesh in contact.
+
+        Columns ``start``, ``end``, ``duration`` (s), ``mesh``, ``planet`` (``""`` for a
+        parallel stage), ``n_planets`` (1). Episodes with double contact on two or more planets
+        at once (any of their meshes) follow with ``mesh = "<stage> (several planets)"``,
+        ``planet`` listing them and ``n_planets`` >= 2.
+        """
+        iv = self._intervals()
+        meshes = sorted({k.rsplit(":", 1)[0] for k in iv if k.endswith((":front", ":back"))})
+        rows = []
+        for m in meshes:
+            for a0, a1 in iv.get(f"{m}:front", []):
+                for b0, b1 in iv.get(f"{m}:back", []):
+                    s, e = max(a0, b0), min(a1, b1)
+                    if e > s:
+                        rows.append((s, e, e - s, m, _planet_of(m), 1))
+        single = pd.DataFrame(rows, columns=["start", "end", "duration", "mesh", "planet",
+                                             "n_planets"]).sort_values("start",
+                                                                       ignore_index=True)
+        # simultaneous double contact on several planets of one stage: sweep the boundaries
+        multi = []
+        by_stage: dict[str, list] = {}
+        for r in single.itertuples(index=False):
+            if r.planet:
+                by_stage.setdefault(_stage_of(r.mesh), []).append((r.start, r.end, r.planet))
+        for stage, eps in by_stage.items():
+            label = f"{stage} (several planets)" if stage else "several planets"
+            marks = sorted({x for s, e, _ in eps for x in (s, e)})
+            current = None
+            for a, b in zip(marks[:-1], marks[1:], strict=True):
+                mid = 0.5 * (a + b)
+                planets = tuple(sorted({p for s, e, p in eps if s <= mid < e}))
+                if len(planets) >= 2 and current and current[2] == planets and current[1] == a:
+                    current[1] = b
+                    continue
+                if current:
+                    multi.append(current)
+                current = [a, b, planets, label] if len(planets) >= 2 else None
+            if current:
+                multi.append(current)
+        multi = [(a, b, b - a, label, ",".join(pl), len(pl)) for a, b, pl, label in multi]
+        several = pd.DataFrame(multi, columns=single.columns)
+        return pd.concat([single, several], ignore_index=True)
+
+    def load_sharing(self) -> pd.DataFrame:
+        """Per-planet share of the load carried by the sun-planet meshes over time.
+
+        Columns ``<stage>.planetN`` (share of the stage's total sun-planet flank force,
+        front minus back) and ``<stage>.factor`` = N * the largest share (1 = equal sharing).
+        ``result.attrs["peak_factor"]`` holds the peak factor of each stage.
+        """
+        cols = [c for c in self.forces.columns if re.search(r"sun_planet\d+\.front$", c)]
+        out = pd.DataFrame(index=self.forces.index)
+        peaks = {}
+        by_stage: dict[str, list] = {}
+        for c in cols:
+            mesh = c[: -len(".front")]
+            by_stage.setdefault(_stage_of(mesh), []).append(mesh)
+        for stage, meshes in by_stage.items():
+            net = np.column_stack([self.forces[f"{m}.front"] - self.forces[f"{m}.back"]
+                                   for m in meshes])
+            tot = net.sum(axis=1, keepdims=True)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                share = np.where(np.abs(tot) > 0, net / np.where(tot == 0, 1, tot), np.nan)
+            prefix = f"{stage}." if stage else ""
+            for i, m in enumerate(meshes):
+                out[f"{prefix}{_planet_of(m)}"] = share[:, i]
+            factor = len(meshes) * np.nanmax(share, axis=1) if len(share) else share
+            out[f"{prefix}factor"] = factor
+            peaks[stage or "stage"] = float(np.nanmax(factor)) if np.isfinite(factor).any() \
+                else float("nan")
+        out.attrs["peak_factor"] = peaks
+        return out
+
+    def to_frame(self) -> pd.DataFrame:
+        """Displacements and contact forces side by side, indexed by time."""
+        return pd.concat([self.q, self.forces], axis=1)
+
+    def plot(self, columns=None, ax=None):
+        """Contact forces against time (default: all flank forces) with the events marked;
+        returns the matplotlib Figure."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            fig, ax = plt.subplots(figsize=(9, 4.5))
+        else:
+            fig = ax.figure
+        cols = columns or [c for c in self.forces.columns if c.endswith((".front", ".back"))]
+        cols = cols or list(self.forces.columns)
+        for c in cols:
+            ax.plot(self.forces.index, self.forces[c] / 1e3, lw=1.0, label=c,
+                    ls="-" if c.endswith(".front") else "--")
+        if len(self.events) and len(self.events) < 400:
+            for tt in self.events.time:
+                ax.axvline(tt, color="0.85", lw=0.5, zorder=0)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("contact force [kN]")
+        ax.legend(fontsize=7, ncol=2)
+        fig.tight_layout()
+        return fig
+
+    def save(self, directory) -> Path:
+        """Write ``q.csv``, ``v.csv``, ``forces.csv``, ``events.csv`` and ``settings.json``."""
+        d = Path(directory)
+        d.mkdir(parents=True, exist_ok=True)
+        self.q.to_csv(d / "q.csv", index_label="time")
+        self.v.to_csv(d / "v.csv", index_label="time")
+        self.forces.to_csv(d / "forces.csv", index_label="time")
+        self.events.to_csv(d / "events.csv", index=False)
+        (d / "settings.json").write_text(json.dumps(
+            {**self.settings, "stats": self.stats}, indent=2, default=str))
+        return d

@@ -1,0 +1,207 @@
+"""The piecewise-linear system in first-order form, per contact state (DESIGN 3.2).
+
+Within contact state ``s`` the equations of motion are linear::
+
+    x' = A_s x + Bm F(t),   x = [q; v],   A_s = [[0, I], [-M^-1 K_s, -M^-1 C_s]],
+    Bm = [0; M^-1],          F(t) = B u(t) + f_s + Omega^2 f_cent
+
+with ``K_s``, ``C_s``, ``f_s`` from :class:`gearmodal.assembly.Assembly`. Over a step of length
+``h`` with the force linear in time (first-order hold), the exact solution is (Van Loan's
+augmented exponential)::
+
+    expm([[A h, Bm h, 0], [0, 0, I], [0, 0, 0]]) = [[Phi, Ga, Gb], [0, I, I], [0, 0, I]]
+    x(h) = Phi x(0) + (Ga - Gb) F(0) + Gb F(h)
+
+:class:`Propagators` caches ``(Phi, Ga - Gb, Gb)`` per contact state and per dyadic step
+``dt / 2^j``; any duration is covered by dyadic pieces plus a short remainder evaluated by the
+Taylor series of the exact solution (convergent to machine precision because the remainder is
+shorter than ``0.5 / rho(A_s)``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..assembly import Assembly
+from ..errors import ModelError
+
+RPM = 2.0 * math.pi / 60.0
+#: the Taylor remainder is used on pieces with rho(A) * length <= TAYLOR_REACH
+TAYLOR_REACH = 0.5
+#: number of Taylor terms kept (error ~ TAYLOR_REACH^n / n!, far below machine precision)
+TAYLOR_TERMS = 28
+
+
+class PiecewiseLinearSystem:
+    """First-order matrices of an assembled model at a frozen input speed.
+
+    Parameters
+    ----------
+    asm : the assembled model.
+    speed_rpm : input speed; gyroscopic, centripetal and centrifugal terms are frozen at it.
+    """
+
+    def __init__(self, asm: Assembly, speed_rpm: float = 0.0):
+        self.asm = asm
+        n = asm.n
+        self.n = n
+        om = float(speed_rpm) * RPM
+        self.speed_rpm = float(speed_rpm)
+        try:
+            L = np.linalg.cholesky(asm.M)
+        except np.linalg.LinAlgError:
+            raise ModelError("mass", "the mass matrix is not positive definite") from None
+        self.Minv = sla.cho_solve((L, True), np.eye(n))
+        self.K0 = asm.K + om**2 * asm.K_cent
+        self.C0 = asm.C + om * asm.G
+        self.f_const = om**2 * asm.f_cent
+        c = asm.contacts
+        self.W = np.ascontiguousarray(c.W)
+        self.offset = c.offset.copy()
+        self.k = c.stiffness.copy()
+        self.c = c.damping.copy()
+        self.names = [f"{e}:{f}" for e, f in zip(c.element, c.contact, strict=True)]
+
+    @property
+    def n_contacts(self) -> int:
+        return len(self.offset)
+
+    def matrices(self, s: np.ndarray):
+        """``(K_s, C_s, f_s)`` of contact state ``s`` (booleans)."""
+        W = self.W[s]
+        K = self.K0 + (W.T * self.k[s]) @ W
+        C = self.C0 + (W.T * self.c[s]) @ W
+        f = W.T @ (self.k[s] * self.offset[s])
+        return K, C, f
+
+    def first_order(self, s: np.ndarray):
+        """``(A_s, f_s)``: the state matrix and the constant contact force of state ``s``."""
+        n = self.n
+        K, C, f = self.matrices(s)
+        A = np.zeros((2 * n, 2 * n))
+        A[:n, n:] = np.eye(n)
+        A[n:, :n] = -self.Minv @ K
+        A[n:, n:] = -self.Minv @ C
+        return A, f
+
+    def penetration(self, x: np.ndarray) -> np.ndarray:
+        """Penetration ``W q - offset`` of every contact."""
+        return self.W @ x[: self.n] - self.offset
+
+    def rate(self, x: np.ndarray) -> np.ndarray:
+        """Penetration rate ``W v``."""
+        return self.W @ x[self.n:]
+
+    def forces(self, x: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Contact forces ``k p + c p'`` of the active contacts (0 for open ones), N or N m."""
+        p = self.penetration(x)
+        r = self.rate(x)
+        return np.where(s, self.k * p + self.c * r, 0.0)
+
+    def energy(self, x: np.ndarray, s: np.ndarray | None = None) -> float:
+        """Mechanical energy: kinetic + always-active springs + compressed contacts, J.
+
+        Conserved by the undamped, unloaded system (centripetal terms act as springs)."""
+        n = self.n
+        q, v = x[:n], x[n:]
+        p = np.maximum(self.penetration(x), 0.0)
+        return float(0.5 * v @ self.asm.M @ v + 0.5 * q @ self.K0 @ q
+                     + 0.5 * np.sum(self.k * p * p) - self.f_const @ q)
+
+
+class Propagators:
+    """Per contact state: ``A_s``, ``f_s``, spectral radius and dyadic step propagators."""
+
+    def __init__(self, system: PiecewiseLinearSystem, dt: float):
+        self.system = system
+        self.dt = float(dt)
+        self._states: dict[bytes, dict] = {}
+        self.n_exponentials = 0
+
+    def state(self, s: np.ndarray) -> dict:
+        key = s.tobytes()
+        d = self._states.get(key)
+        if d is None:
+            A, f = self.system.first_order(s)
+            rho = float(np.max(np.abs(np.linalg.eigvals(A)))) if len(A) else 0.0
+            rho = max(rho, 1e-300)
+            d = {"A": A, "f": f, "rho": rho, "levels": {}}
+            self._states[key] = d
+        return d
+
+    def level(self, s: np.ndarray, j: int):
+        """``(Phi, G0, G1)`` for the step ``dt / 2**j`` in state ``s``: x(h) = Phi x0 + G0 F0
+        + G1 F1 (F the generalised force, first-order hold)."""
+        d = self.state(s)
+        got = d["levels"].get(j)
+        if got is None:
+            sys = self.system
+            h = self.dt / 2**j
+            N, n = 2 * sys.n, sys.n
+            Z = np.zeros((N + 2 * n, N + 2 * n))
+            Z[:N, :N] = d["A"] * h
+            Z[n:N, N:N + n] = sys.Minv * h
+            Z[N:N + n, N + n:] = np.eye(n)
+            E = sla.expm(Z)
+            self.n_exponentials += 1
+            Phi = E[:N, :N]
+            Ga = E[:N, N:N + n]
+            Gb = E[:N, N + n:]
+            got = (np.ascontiguousarray(Phi), np.ascontiguousarray(Ga - Gb),
+                   np.ascontiguousarray(Gb))
+            d["levels"][j] = got
+        return got
+
+    def resolve_level(self, s: np.ndarray) -> int:
+        """Smallest dyadic level whose step is at most half the fastest period of state ``s``
+        (``rho h <= pi``): over such a piece every modal component of a gap has at most one
+        extremum, so the end values and rates bracket every crossing."""
+        d = self.state(s)
+        j = d.get("resolve")
+        if j is None:
+            j = 0
+            while d["rho"] * self.dt / 2**j > math.pi and j < 60:
+                j += 1
+            d["resolve"] = j
+        return j
+
+    def taylor_level(self, s: np.ndarray) -> int:
+        """Smallest dyadic level whose step is within the Taylor reach of state ``s``."""
+        rho = self.state(s)["rho"]
+        j = 0
+        while rho * self.dt / 2**j > TAYLOR_REACH and j < 60:
+            j += 1
+        return j
+
+    def derivatives(self, s: np.ndarray, x: np.ndarray, F: np.ndarray, dF: np.ndarray):
+        """Taylor coefficients ``y_k = x^(k) / k!`` (k = 0..TAYLOR_TERMS-1) of the exact
+        solution at a point where the force is ``F`` with slope ``dF`` (per second)."""
+        d = self.state(s)
+        A = d["A"]
+        n = self.system.n
+        Minv = self.system.Minv
+        Y = np.empty((TAYLOR_TERMS, 2 * n))
+        Y[0] = x
+        y = A @ x
+        y[n:] += Minv @ (F + d["f"])
+        Y[1] = y
+        y = A @ y
+        y[n:] += Minv @ dF
+        Y[2] = y / 2.0
+        fact = 2.0
+        for k in range(3, TAYLOR_TERMS):
+            y = A @ y
+            fact *= k
+            Y[k] = y / fact
+        return Y
+
+
+def taylor_eval(Y: np.ndarray, delta: float) -> np.ndarray:
+    """``sum_k Y[k] delta^k`` by Horner's rule."""
+    out = Y[-1].copy()
+    for k in range(len(Y) - 2, -1, -1):
+        out = out * delta + Y[k]
+    return out
