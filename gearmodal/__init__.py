@@ -24,6 +24,7 @@ from .model import (
     parallel_stage,
     planetary_stage,
 )
+from .integrate import SimulationResult, simulate
 from .model.toml_io import load, loads
 from .static import Equilibrium, balance, equilibrium
 
@@ -31,5 +32,6 @@ __version__ = "0.1.0"
 
 __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Equilibrium", "Frame",
            "Gear", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
+           "SimulationResult", "simulate",
            "assemble", "balance", "campbell", "drivetrain", "equilibrium", "gear_pair",
            "lin_parker_stage", "load", "loads", "modal", "parallel_stage", "planetary_stage"]

@@ -16,18 +16,22 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import scipy.linalg as sla
+from scipy.linalg import blas
 from scipy.optimize import linear_sum_assignment
 
 from .errors import ModelError
 from .modal import RPM, eigensolve
 from .model.components import Gear
 from .model.model import Model
-from .modetypes import classify
+from .modetypes import LOOSE, QUIET, classify
 
 #: a tracked mode whose shape keeps less MAC than this across a near-approach has veered
 VEERING_MAC = 0.5
 #: half-width (in speed steps) of the window over which a veering's shape exchange is judged
 VEERING_WINDOW = 3
+#: mode-shape entries (speeds x DOF x modes) whose types are worked out in one vectorised pass
+_LABEL_ENTRIES = 1 << 20
 
 
 def mac(phi: np.ndarray, psi: np.ndarray, M: np.ndarray | None = None) -> np.ndarray:
@@ -245,30 +249,42 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     st = asm.state(state)
     K, C = asm.stiffness(st), asm.damping(st)
     n = asm.n
+    M = asm.M
+    solve = _sweep_solver(M, C, K, asm.G, asm.K_cent)
+    Mz = M.astype(complex)
+    label = _labeller(asm)
+    chunk = max(1, _LABEL_ENTRIES // max(n * n, 1))  # speeds labelled together
+    pending = []  # (speed index, shape, M shape) not yet labelled
     freqs = np.zeros((s.size, n))
     zetas = np.zeros((s.size, n))
     types = np.empty((s.size, n), dtype=object)
     macs = []
     shapes = []
-    prev = None
+    prev = prev_M = prev_norm = None
     for i, rpm in enumerate(s):
-        lam, phi = eigensolve(asm.M, C, K, asm.G, rpm * RPM, asm.K_cent)
+        lam, phi = solve(rpm * RPM)
         absl = np.abs(lam)
         f = absl / (2 * math.pi)
         with np.errstate(invalid="ignore", divide="ignore"):
             z = np.where(absl > 0, -lam.real / np.where(absl > 0, absl, 1.0), 0.0)
+        Mphi = blas.zgemm(1.0, Mz, phi)  # M phi; see _sweep_solver on scipy's BLAS
+        norm = np.real(np.einsum("im,im->m", phi.conj(), Mphi))
         if prev is not None:
-            mm = mac(prev, phi, asm.M)
+            # mac(prev, phi, M) with M prev and the norms kept from the previous speed
+            mm = np.abs(blas.zgemm(1.0, prev_M, phi, trans_a=2)) ** 2 / np.outer(prev_norm, norm)
             # one-to-one assignment: maximise total MAC, tie-broken by frequency closeness
             cost = -mm + 1e-6 * np.abs(freqs[i - 1][:, None] - f[None, :]) / (1.0 + f.max())
             _, col = linear_sum_assignment(cost)
-            f, z, phi = f[col], z[col], phi[:, col]
+            f, z, phi, Mphi, norm = f[col], z[col], phi[:, col], Mphi[:, col], norm[col]
             mm = mm[:, col]
             macs.append(mm)
         freqs[i], zetas[i] = f, z
-        types[i] = classify(asm, phi, f)
         shapes.append(phi)
-        prev = phi
+        pending.append((i, phi, Mphi))
+        if len(pending) == chunk or i == s.size - 1:
+            _label_speeds(label, pending, freqs, types)
+            pending = []
+        prev, prev_M, prev_norm = phi, Mphi, norm
         if progress is not None:
             progress(i + 1, s.size)
     order_map = default_orders(model) if orders is None else dict(orders)
@@ -283,27 +299,196 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
                                               for i, a, b, fr, gap, m in found]})
 
 
+def _sweep_solver(M, C, K, G, Kc):
+    """``solve(speed)``: :func:`gearmodal.modal.eigensolve` of ``(M, C, K, G, speed, Kc)`` for a
+    sweep in which only the speed changes.
+
+    ``M^-1 K``, ``M^-1 K_cent``, ``M^-1 C`` and ``M^-1 G`` are computed once, so that each speed
+    costs one non-symmetric eigen-solve of the state matrix
+    ``[[0, I], [-(M^-1 K + speed^2 M^-1 K_cent), -(M^-1 C + speed M^-1 G)]]``; eigenvalues and
+    shapes are selected and ordered exactly as ``eigensolve`` does. Speeds without a damping
+    term (undamped at rest) go to ``eigensolve`` itself (the symmetric solver).
+    """
+    n = M.shape[0]
+
+    def minv(X):
+        return sla.solve(M, X, assume_a="pos")
+
+    MiK, MiC = minv(K), minv(C)
+    MiG = minv(G) if G is not None else None
+    MiKc = minv(Kc) if Kc is not None else None
+
+    def solve(speed):
+        D = C + (speed * G if G is not None and speed else 0.0)
+        if not np.any(D):
+            return eigensolve(M, C, K, G, speed, Kc)
+        A = np.zeros((2 * n, 2 * n))
+        A[:n, n:] = np.eye(n)
+        lower_k, lower_d = A[n:, :n], A[n:, n:]
+        np.negative(MiK, out=lower_k)
+        if MiKc is not None and speed:
+            lower_k -= speed**2 * MiKc
+        np.negative(MiC, out=lower_d)
+        if MiG is not None and speed:
+            lower_d -= speed * MiG
+        lam, vec = sla.eig(A, overwrite_a=True, check_finite=False)
+        # selection and order as in eigensolve: oscillatory roots with Im > 0, then the real
+        # roots of smallest magnitude, one per DOF, ordered by |lambda|
+        scale = max(1.0, float(np.max(np.abs(lam))))
+        osc = np.abs(lam.imag) > 1e-9 * scale
+        pos = np.flatnonzero(osc & (lam.imag > 0))
+        real = np.flatnonzero(~osc)
+        real = real[np.argsort(np.abs(lam[real]), kind="stable")]
+        keep = np.concatenate([pos, real[: max(0, n - len(pos))]])
+        lam, vec = lam[keep], vec[:n, keep]
+        order = np.argsort(np.abs(lam), kind="stable")
+        return lam[order], vec[:, order]
+
+    return solve
+
+
+def _label_speeds(label, pending, freqs, types):
+    """Mode types of the speeds in ``pending`` (``(index, shape, M shape)``), all modes of all
+    of them in one vectorised pass; a speed with a mode too close to a threshold to be sure is
+    labelled by ``classify`` itself."""
+    idx = [i for i, _, _ in pending]
+    phi = np.concatenate([p for _, p, _ in pending], axis=1)
+    Mphi = np.concatenate([mp for _, _, mp in pending], axis=1)
+    f = freqs[idx]
+    fmax = np.repeat(np.max(f, axis=1), f.shape[1])
+    out, unsure = label(phi, Mphi, f.ravel(), fmax)
+    n = f.shape[1]
+    for k, i in enumerate(idx):
+        cols = slice(k * n, (k + 1) * n)
+        if unsure[cols].any():
+            types[i] = label.exact(pending[k][1], freqs[i])
+        else:
+            types[i] = out[cols].tolist()
+
+
+def _labeller(asm, rigid_rel: float = 1e-6):
+    """``label(phi, M phi, freq_hz, fmax_hz) -> (labels, unsure)``: the mode types of
+    :func:`gearmodal.modetypes.classify` (default arguments: nominal-state ``K``), vectorised
+    over the columns of ``phi``, which may hold the modes of several speeds (``fmax_hz``: the
+    highest frequency of each column's speed). ``label.exact(phi, freq_hz)`` is ``classify``.
+
+    Mirrors ``classify`` rule by rule (rigid, housing, the Lin & Parker tests on the stage with
+    the most energy, torsional, mixed): keep the two in step. The energy sums are formed with one
+    matrix product instead of one masked sum per mode and group, so they can differ from
+    ``classify``'s in the last bits; a mode whose deciding quantity lies within a rounding bound
+    of its threshold (or whose top two stages are that close) is flagged ``unsure``, and its
+    speed goes to ``classify`` itself (:func:`_label_speeds`), so the labels are always
+    ``classify``'s.
+    """
+    K = asm.stiffness()
+    M = asm.M
+    absK, absM, Kz = np.abs(K), np.abs(M), K.astype(complex)
+    names = asm.dof_names
+    n = len(names)
+    rot = np.array([nm.rsplit(".", 1)[1] in ("theta", "u") for nm in names], dtype=bool)
+    body = [nm.rsplit(".", 1)[0] for nm in names]
+    planet = np.array([b.rsplit(".", 1)[-1].startswith("planet") for b in body], dtype=bool)
+    stage_of = [b.rsplit(".", 1)[0] if "." in b else "" for b in body]
+    central = np.array([b.rsplit(".", 1)[-1] in ("carrier", "sun", "ring") for b in body],
+                       dtype=bool)
+    housing = np.array([b == "housing" or b.endswith(".housing") for b in body], dtype=bool)
+    has_planets, has_housing = bool(planet.any()), bool(housing.any())
+    stages = sorted(set(stage_of))  # pandas groupby order; idxmax takes the first maximum
+    rows = [rot, housing]
+    for stg in stages:
+        in_stage = np.array([x == stg for x in stage_of], dtype=bool)
+        c, p = central & in_stage, planet & in_stage
+        rows += [in_stage, c | p, c, c & ~rot, c & rot]
+    S = np.array(rows, dtype=float)
+    ns = len(stages)
+    st_rows = 2 + 5 * np.arange(ns)
+    cp_any = np.array([bool(S[r + 1].any()) for r in st_rows], dtype=bool)
+    eps = np.finfo(float).eps
+    gamma = 16.0 * (n + 2) * eps
+
+    def label(phi, Mphi, freq_hz, fmax):
+        nm = phi.shape[1]
+        # rigid: stiffness Rayleigh quotient num / den (as a frequency) below rigid_rel * fmax
+        num = np.real(np.einsum("im,im->m", phi.conj(), blas.zgemm(1.0, Kz, phi)))
+        den = np.real(np.einsum("im,im->m", phi.conj(), Mphi))
+        thr = rigid_rel * fmax
+        # classify: static_hz < thr, never true for thr <= 0 (static_hz >= 0)
+        aphi = np.abs(phi)
+        q = (2 * np.pi * thr) ** 2
+        d = num - q * den
+        bound = (gamma * (np.einsum("im,im->m", aphi, blas.dgemm(1.0, absK, aphi))
+                          + q * np.einsum("im,im->m", aphi, blas.dgemm(1.0, absM, aphi)))
+                 + 16 * eps * q * np.abs(den))
+        rigid = (d < 0) & (thr > 0)
+        unsure = (thr > 0) & ~(np.abs(d) > bound)  # also catches NaN
+        # kinetic energy share per DOF, as modetypes.dof_energy
+        e = np.real(phi.conj() * Mphi)
+        tot = e.sum(axis=0, keepdims=True)
+        e = np.divide(e, tot, out=np.zeros_like(e), where=tot > 0)
+        tol = gamma * np.abs(e).sum(axis=0)
+        g = blas.dgemm(1.0, S, e)
+        out = np.full(nm, "mixed", dtype=object)
+        open_ = np.ones(nm, dtype=bool)
+
+        def rule(cond, margin, tag, where=None):
+            nonlocal unsure, open_
+            m = open_ if where is None else open_ & where
+            unsure |= m & ~(np.abs(margin) > tol * 4)
+            hit = m & cond
+            out[hit] = tag
+            open_ = open_ & ~hit
+
+        out[rigid] = "rigid"
+        open_ &= ~rigid
+        if has_housing:
+            rule(g[1] > 0.5, g[1] - 0.5, "housing")
+        if has_planets:
+            sums = g[st_rows]
+            best = np.argmax(sums, axis=0)
+            if ns > 1:
+                top2 = np.sort(sums, axis=0)[-2:]
+                unsure |= open_ & ~(top2[1] - top2[0] > tol * 4)
+            cols = np.arange(nm)
+            r = st_rows[best]
+            cp, c, cnr, cr = g[r + 1, cols], g[r + 2, cols], g[r + 3, cols], g[r + 4, cols]
+            inner = cp_any[best] & (cp > 0.5)
+            unsure |= open_ & cp_any[best] & ~(np.abs(cp - 0.5) > tol * 4)
+            rule(c < QUIET, c - QUIET, "planet", inner)
+            rule(cnr < QUIET * c + QUIET, cnr - QUIET * c - QUIET, "rotational", inner)
+            rule(cr < QUIET * c + QUIET, cr - QUIET * c - QUIET, "translational", inner)
+            rule(c < LOOSE * cp, c - LOOSE * cp, "planet", inner)
+            rule(cnr < LOOSE * c, cnr - LOOSE * c, "rotational", inner)
+            rule(cr < LOOSE * c, cr - LOOSE * c, "translational", inner)
+        rule(g[0] > 0.9, g[0] - 0.9, "torsional")
+        return out, unsure
+
+    def exact(phi, freq_hz):
+        return classify(asm, phi, freq_hz, rigid_rel=rigid_rel, K=K)
+
+    label.exact = exact
+    return label
+
+
 def _find_veerings(s, freqs, shapes, M, w=VEERING_WINDOW):
     """Local minima of the gap between frequency-adjacent tracked modes (no sign change)
     across which the tracked shape changes character (MAC < VEERING_MAC)."""
     ns, n = freqs.shape
     out = []
-    if ns < 2 * w + 1:
+    if ns < 2 * w + 1 or n < 2:
         return out
     order = np.argsort(freqs, axis=1)
-    pairs = set()
-    for i in range(ns):
-        for k in range(n - 1):
-            pairs.add((int(order[i, k]), int(order[i, k + 1])))
-    for a, b in sorted(pairs):
-        gap = freqs[:, b] - freqs[:, a]
-        if np.any(gap > 0) and np.any(gap < 0):
-            continue  # they cross: not a veering
-        g = np.abs(gap)
-        scale = np.maximum(np.abs(freqs[:, a]), 1e-12)
-        for i in range(w, ns - w):
-            if g[i] < g[i - 1] and g[i] <= g[i + 1] and g[i] < 0.1 * scale[i]:
-                m = float(mac(shapes[i - w][:, [a]], shapes[i + w][:, [a]], M)[0, 0])
-                if m < VEERING_MAC:
-                    out.append((i, a, b, float(freqs[i, a]), float(g[i]), m))
+    # frequency-adjacent pairs at any speed, in sorted order
+    pairs = np.unique(np.stack([order[:, :-1].ravel(), order[:, 1:].ravel()], axis=1), axis=0)
+    gap = freqs[:, pairs[:, 1]] - freqs[:, pairs[:, 0]]  # (ns, n_pairs)
+    keep = ~(np.any(gap > 0, axis=0) & np.any(gap < 0, axis=0))  # crossing pairs never veer
+    pairs, g = pairs[keep], np.abs(gap[:, keep]).T  # (n_pairs, ns)
+    scale = np.maximum(np.abs(freqs[:, pairs[:, 0]]), 1e-12).T
+    mid = g[:, w:ns - w]
+    hit = ((mid < g[:, w - 1:ns - w - 1]) & (mid <= g[:, w + 1:ns - w + 1])
+           & (mid < 0.1 * scale[:, w:ns - w]))
+    for k, j in zip(*np.nonzero(hit), strict=True):  # pair by pair, speeds increasing
+        a, b, i = int(pairs[k, 0]), int(pairs[k, 1]), int(j) + w
+        m = float(mac(shapes[i - w][:, [a]], shapes[i + w][:, [a]], M)[0, 0])
+        if m < VEERING_MAC:
+            out.append((i, a, b, float(freqs[i, a]), float(g[k, i]), m))
     return out

@@ -30,9 +30,8 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     nfev = 0
     while filled <= n_steps:
         A, f = system.first_order(s)
-        Minv = system.Minv
 
-        def rhs(tt, xx, A=A, f=f):
+        def rhs(tt, xx, A=A, f=f, Minv=system.Minv):
             k = min(int(tt / dt), n_steps - 1)
             w = tt / dt - k
             F = F_grid[k] * (1 - w) + F_grid[k + 1] * w + f
