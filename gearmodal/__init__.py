@@ -7,6 +7,7 @@ piecewise-linear contact model, modal and Campbell analysis. SI units throughout
 from .assembly import Assembly, assemble
 from .campbell import CampbellResult, campbell
 from .errors import ModelError
+from .integrate import SimulationResult, simulate
 from .modal import ModalResult, modal
 from .model import (
     DOF_LEVELS,
@@ -24,7 +25,6 @@ from .model import (
     parallel_stage,
     planetary_stage,
 )
-from .integrate import SimulationResult, simulate
 from .model.toml_io import load, loads
 from .static import Equilibrium, balance, equilibrium
 

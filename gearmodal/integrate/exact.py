@@ -9,10 +9,11 @@ end values and rates reaches within ``GRAZE_MARGIN`` of contact (a brief contact
 two crossings inside one piece). Pieces are never longer than half the fastest period of the
 current contact state (``rho(A_s) h <= pi``), so that every modal component of a gap has at
 most one extremum per piece; with ``dt`` below that no step is split. A flagged piece is
-halved with the cached exact propagators of the next dyadic level until it is within the Taylor reach of the exact solution, where the
-root is located on the Taylor series of the exact solution to machine precision. The state is
-switched there, the event logged, and propagation continues to the next output time. ``dt`` is
-a propagation and output step, never a limit on what is detected.
+halved with the cached exact propagators of the next dyadic level until it is within the
+Taylor reach of the exact solution, where the root is located on the Taylor series of the
+exact solution to machine precision. The state is switched there, the event logged, and
+propagation continues to the next output time. ``dt`` is a propagation and output step, never a
+limit on what is detected.
 """
 
 from __future__ import annotations
