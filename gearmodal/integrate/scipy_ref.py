@@ -53,10 +53,11 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         nfev += sol.nfev
         if not sol.success and sol.status != 1:
             raise ModelError("simulate", f"scipy ({scipy_method}) failed: {sol.message}")
-        m = sol.y.shape[1]
-        X[filled:filled + m] = sol.y.T
-        S[filled:filled + m] = s
-        filled += m
+        m = len(sol.t)
+        if m:
+            X[filled:filled + m] = np.asarray(sol.y).T
+            S[filled:filled + m] = s
+            filled += m
         if sol.status != 1:
             break
         # the earliest event(s)

@@ -1,0 +1,136 @@
+"""Proof of exactness of ``method="exact"`` against closed forms and a tight solve_ivp."""
+
+import math
+
+import numpy as np
+import pytest
+
+import gearmodal as gm
+from gearmodal.integrate.system import PiecewiseLinearSystem
+
+I_P, I_W, K_MESH = 1e-3, 1.6e-2, 2e8
+
+
+def pair(backlash):
+    p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=I_P)
+    w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=I_W)
+    return gm.gear_pair(p, w, mesh_stiffness=K_MESH, backlash=backlash), p.base_radius, \
+        w.base_radius
+
+
+def rattle_times(b, rp, rw, approach, n):
+    """Closed form of a free torsional pair rattling in its backlash, starting mid-backlash:
+    flight b/2 at the relative speed, half a period of the mesh oscillator in contact, flight
+    b, ... Effective mass 1/m_e = r_p^2/I_p + r_w^2/I_w."""
+    me = 1.0 / (rp**2 / I_P + rw**2 / I_W)
+    half = math.pi / math.sqrt(K_MESH / me)
+    t, out = (b / 2) / approach, []
+    for _ in range(n // 2):
+        out += [t, t + half]
+        t += half + b / approach
+    return np.array(out)
+
+
+@pytest.mark.parametrize("dt", [1e-4, 3e-3])
+def test_rattle_contact_and_separation_times(dt):
+    """Free flight inside the backlash, contact, separation, flight to the back flank...:
+    every event time equals the closed form to machine precision, also with dt 18 times longer
+    than the contact (brief contacts inside one step are found)."""
+    b = 1e-4
+    model, rp, rw = pair(b)
+    om = 1.0  # pinion speed, rad/s; the wheel at rest
+    sim = gm.simulate(model, 0.02, dt=dt, q0={"pinion.theta": -b / 2 / rp},
+                      v0={"pinion.theta": om})
+    ev = sim.events
+    expect = rattle_times(b, rp, rw, rp * om, len(ev))
+    assert len(ev) >= 12
+    # times are sums of a few closed-form terms: agreement to a few ulp of the time
+    np.testing.assert_allclose(ev.time.to_numpy(), expect, rtol=1e-14, atol=1e-18)
+    assert list(ev.contact[:4]) == ["front", "front", "back", "back"]
+    assert list(ev.state_after[:2]) == ["closed", "open"]
+    # contact begins and ends with the approach speed reversed (elastic, undamped)
+    np.testing.assert_allclose(np.abs(ev.gap_rate), rp * om, rtol=1e-12)
+
+
+def test_brief_contact_much_shorter_than_dt_is_found():
+    b = 1e-4
+    model, rp, rw = pair(b)
+    me = 1.0 / (rp**2 / I_P + rw**2 / I_W)
+    contact = math.pi / math.sqrt(K_MESH / me)
+    dt = 50 * contact
+    sim = gm.simulate(model, 4 * dt, dt=dt, q0={"pinion.theta": -b / 2 / rp},
+                      v0={"pinion.theta": 1.0})
+    first = sim.events.iloc[:2]
+    t1 = (b / 2) / (rp * 1.0)
+    np.testing.assert_allclose(first.time, [t1, t1 + contact], rtol=1e-13)
+    assert first.time.iloc[1] - first.time.iloc[0] < dt / 40
+
+
+def test_bearing_clearance_closes_under_step_load():
+    """A mass in a dead band c under a step force F from rest: free flight to x = c at
+    t_c = sqrt(2 m c / F), then the spring; it leaves the contact when
+    theta = omega (t - t_c) = 2 pi - 2 atan(v_c k / (omega F))."""
+    m_, k, c, F = 3.0, 2e6, 1e-4, 50.0
+    model = gm.Model("block", input="body")
+    model.add(gm.RigidBody(name="body", mass=m_, inertia=1.0, dofs="planar"))
+    model.add(gm.Bearing("b", "body", None, stiffness={"x": k, "y": k, "theta": 1e4},
+                         clearance={"x": c}))
+    sim = gm.simulate(model, 0.05, dt=1e-3, loads={"body.force_x": F})
+    tc = math.sqrt(2 * m_ * c / F)
+    om = math.sqrt(k / m_)
+    vc = F / m_ * tc
+    ts = tc + (2 * math.pi - 2 * math.atan(vc * k / (om * F))) / om
+    ev = sim.events[sim.events.contact == "x+"]
+    np.testing.assert_allclose(ev.time.iloc[:2], [tc, ts], rtol=1e-12)
+    assert list(ev.state_after.iloc[:2]) == ["closed", "open"]
+
+
+def test_undamped_energy_is_conserved_over_many_switches():
+    """No loads, no damping: the mechanical energy stays constant through thousands of
+    contact switches. The rigid-body mode is started at rest so that the angles stay small
+    (gaps are differences of angles; a drifting rotation would cost digits)."""
+    b = 1e-6
+    model, rp, rw = pair(b)
+    wd = I_P * rw / (I_W * rp)  # zero momentum of the free rotation
+    sim = gm.simulate(model, 0.3, dt=1e-4, q0={"pinion.theta": -b / 2 / rp},
+                      v0={"pinion.theta": 1.0, "wheel.theta": wd})
+    n_switch = len(sim.events)
+    assert n_switch > 3000
+    S = PiecewiseLinearSystem(model.assemble())
+    x = np.concatenate([sim.q.to_numpy(), sim.v.to_numpy()], axis=1)
+    E = np.array([S.energy(xx) for xx in x])
+    # rounding accumulates about linearly with the number of operations: a few eps per step
+    # and per switch, i.e. ~1e-16 * (n_steps + n_switch) ~ 1e-12; allow 10x that
+    assert (E.max() - E.min()) / E.max() < 1e-16 * (len(x) + n_switch) * 10
+
+
+def clearance_stage():
+    lp = dict(mass={"carrier": 5.43, "ring": 2.35, "sun": 0.4, "planet": 0.66},
+              inertia_over_r2={"carrier": 6.29, "ring": 3.0, "sun": 0.39, "planet": 0.61},
+              bearing={"carrier": 1e8, "ring": 1e8, "sun": 1e8, "planet": 1e8},
+              torsional={"carrier": 1e6, "ring": 1e9, "sun": 1e6},
+              mesh={"sun_planet": 5e8, "ring_planet": 5e8})
+    m = gm.lin_parker_stage(3, **lp, pressure_angle=math.radians(24.6), backlash=2e-6,
+                            mesh_damping=50.0)
+    br = m.bearings["carrier_support"]
+    br.clearance = {"x": 2e-5, "y": 2e-5}
+    return m
+
+
+def test_exact_agrees_with_tight_solve_ivp_on_planetary_stage_with_clearance():
+    """A Lin & Parker stage whose carrier has a bearing clearance larger than the backlash,
+    driven by a torque and a radial force into double contact: the exact method and DOP853 at
+    rtol 1e-12 give the same trajectory and the same events."""
+    m = clearance_stage()
+    loads = {"carrier.force_u": 2e3, "sun.force_u": -2e3, "carrier.force_y": -3e3}
+    kw = dict(dt=2e-5, loads=loads)
+    ex = gm.simulate(m, 0.004, **kw)
+    ref = gm.simulate(m, 0.004, method="scipy", scipy_method="DOP853", rtol=1e-12,
+                      atol=1e-18, **kw)
+    assert len(ex.events) > 10
+    dc = ex.double_contact()
+    assert len(dc) > 0  # the clearance lets the planets wedge: both flanks in contact
+    scale = np.abs(ref.q.to_numpy()).max()
+    assert np.abs(ex.q.to_numpy() - ref.q.to_numpy()).max() < 1e-7 * scale
+    assert len(ex.events) == len(ref.events)
+    np.testing.assert_allclose(ex.events.time, ref.events.time, rtol=0, atol=1e-9)
