@@ -86,16 +86,16 @@ def test_bearing_clearance_closes_under_step_load():
 
 
 def test_undamped_energy_is_conserved_over_many_switches():
-    """No loads, no damping: the mechanical energy stays constant through thousands of
+    """No loads, no damping: the mechanical energy stays constant through 1e5
     contact switches. The rigid-body mode is started at rest so that the angles stay small
     (gaps are differences of angles; a drifting rotation would cost digits)."""
     b = 1e-6
     model, rp, rw = pair(b)
     wd = I_P * rw / (I_W * rp)  # zero momentum of the free rotation
-    sim = gm.simulate(model, 0.3, dt=1e-4, q0={"pinion.theta": -b / 2 / rp},
+    sim = gm.simulate(model, 9.8, dt=1e-4, q0={"pinion.theta": -b / 2 / rp},
                       v0={"pinion.theta": 1.0, "wheel.theta": wd})
     n_switch = len(sim.events)
-    assert n_switch > 3000
+    assert n_switch >= 100_000
     S = PiecewiseLinearSystem(model.assemble())
     x = np.concatenate([sim.q.to_numpy(), sim.v.to_numpy()], axis=1)
     E = np.array([S.energy(xx) for xx in x])
