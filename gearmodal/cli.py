@@ -1,4 +1,4 @@
-"""Command line: ``gearmodal campbell|modal|info MODEL.toml``.
+"""Command line: ``gearmodal campbell|modal|info MODEL.toml``, ``gearmodal simulate SCENE.toml``.
 
 Input errors (:class:`gearmodal.ModelError`, missing files) are printed as one line without a
 traceback and the exit status is 2.
@@ -71,6 +71,32 @@ def cmd_modal(args) -> int:
     return 0
 
 
+def cmd_simulate(args) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    if args.t_end is not None:
+        scene.t_end = args.t_end
+    sim = scene.simulate()
+    out = sim.save(args.out)
+    fig = sim.plot()
+    fig.savefig(out / "forces.png", dpi=130)
+    plt.close(fig)
+    dc = sim.double_contact()
+    dc.to_csv(out / "double_contact.csv", index=False)
+    ls = sim.load_sharing()
+    if ls.shape[1]:
+        ls.to_csv(out / "load_sharing.csv", index_label="time")
+    print(f"{len(sim.events)} contact events, {len(dc)} double-contact episodes, "
+          f"{sim.stats['cpu_s']:.3g} s CPU; wrote {out}/events.csv, forces.csv, forces.png")
+    return 0
+
+
 def cmd_info(args) -> int:
     model = _load(args.model)
     print(model.summary())
@@ -93,6 +119,11 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--out", required=True)
     m.add_argument("--speed", type=float, help="input speed in rpm (default: rated)")
     m.set_defaults(func=cmd_modal)
+    sm = sub.add_parser("simulate", help="simulate a scene (model + loads + solver settings)")
+    sm.add_argument("scene", help="scene file (TOML), see gearmodal/scene.py")
+    sm.add_argument("--out", required=True, help="output folder")
+    sm.add_argument("--t-end", type=float, dest="t_end", help="override the end time, s")
+    sm.set_defaults(func=cmd_simulate)
     i = sub.add_parser("info", help="model summary and DOF names")
     i.add_argument("model")
     i.set_defaults(func=cmd_info)

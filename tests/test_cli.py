@@ -38,3 +38,26 @@ def test_bad_model_file_gives_one_line_error(tmp_path):
     r = subprocess.run([sys.executable, "-m", "gearmodal.cli", "modal", str(tmp_path / "no.toml"),
                         "--out", str(tmp_path / "o")], capture_output=True, text=True)
     assert r.returncode == 2 and "Traceback" not in r.stderr
+
+
+def test_simulate_scene_writes_events_forces_and_figures(tmp_path):
+    out = tmp_path / "dc"
+    assert main(["simulate", "studies/scenes/planetary_double_contact.toml", "--out", str(out),
+                 "--t-end", "0.05"]) == 0
+    for f in ("events.csv", "forces.csv", "forces.png", "double_contact.csv",
+              "load_sharing.csv", "settings.json"):
+        assert (out / f).exists(), f
+    ev = pd.read_csv(out / "events.csv")
+    assert list(ev.columns) == ["time", "element", "contact", "state_before", "state_after",
+                                "gap_rate", "force_after"]
+    assert (ev.contact == "back").any()  # the clearance lets the back flanks touch
+    dc = pd.read_csv(out / "double_contact.csv")
+    assert len(dc) and (dc.duration > 0).all()
+
+
+def test_bad_scene_is_one_line_error(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[scene]\nmodel = "x.toml"\nt_end = -1\ndt = 1e-4\n')
+    r = subprocess.run([sys.executable, "-m", "gearmodal.cli", "simulate", str(bad), "--out",
+                        str(tmp_path / "o")], capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "x.toml" in r.stderr

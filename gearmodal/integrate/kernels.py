@@ -137,6 +137,13 @@ def poly_first_root(coef, L, n_samples):
     g0 = coef[0]
     if g0 > 0.0 and coef[1] > 0.0:
         return 0.0
+    if g0 == 0.0:
+        # touching at the start: due now if the first nonzero derivative points inwards
+        for k in range(1, m):
+            if coef[k] != 0.0:
+                if coef[k] > 0.0:
+                    return 0.0
+                break
     prev_t = 0.0
     prev_g = g0
     for i in range(1, n_samples):

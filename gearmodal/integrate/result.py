@@ -138,7 +138,10 @@ class SimulationResult:
             prefix = f"{stage}." if stage else ""
             for i, m in enumerate(meshes):
                 out[f"{prefix}{_planet_of(m)}"] = share[:, i]
-            factor = len(meshes) * np.nanmax(share, axis=1) if len(share) else share
+            with np.errstate(invalid="ignore"):
+                valid = np.isfinite(share).any(axis=1)
+                factor = np.full(len(share), np.nan)
+                factor[valid] = len(meshes) * np.nanmax(share[valid], axis=1)
             out[f"{prefix}factor"] = factor
             peaks[stage or "stage"] = float(np.nanmax(factor)) if np.isfinite(factor).any() \
                 else float("nan")
@@ -150,16 +153,22 @@ class SimulationResult:
         return pd.concat([self.q, self.forces], axis=1)
 
     def plot(self, columns=None, ax=None):
-        """Contact forces against time (default: all flank forces) with the events marked;
-        returns the matplotlib Figure."""
+        """Contact forces against time with the events marked; returns the matplotlib Figure.
+
+        Default columns: the flank forces of planet 1 (front and back, sun-planet and
+        ring-planet, as in the paper's Figures 6-8) when the model has planets, else all flank
+        forces. Forces are sampled at the output times: an impact shorter than ``dt`` shows
+        in the event log but may fall between samples here.
+        """
         import matplotlib.pyplot as plt
 
         if ax is None:
             fig, ax = plt.subplots(figsize=(9, 4.5))
         else:
             fig = ax.figure
-        cols = columns or [c for c in self.forces.columns if c.endswith((".front", ".back"))]
-        cols = cols or list(self.forces.columns)
+        flanks = [c for c in self.forces.columns if c.endswith((".front", ".back"))]
+        planet1 = [c for c in flanks if re.search(r"planet1\.(front|back)$", c)]
+        cols = columns or planet1 or flanks or list(self.forces.columns)
         for c in cols:
             ax.plot(self.forces.index, self.forces[c] / 1e3, lw=1.0, label=c,
                     ls="-" if c.endswith(".front") else "--")
