@@ -69,9 +69,22 @@ def _initial(asm: Assembly, values, label: str) -> np.ndarray:
     return out
 
 
+def rotating_geometry(model: Model) -> bool:
+    """True when the assembled matrices depend on the input azimuth: bodies in frames that turn
+    against each other are connected (e.g. a carrier against a fixed housing or anisotropic
+    fixed supports of a rotating body)."""
+    a, b = model.assemble(0.0), model.assemble(0.7)
+    scale = max(np.abs(a.stiffness()).max(), 1e-300)
+    same = (np.allclose(a.stiffness(), b.stiffness(), rtol=0, atol=1e-12 * scale)
+            and np.allclose(a.contacts.W, b.contacts.W, rtol=0, atol=1e-12)
+            and np.allclose(a.B, b.B, rtol=0, atol=1e-12))
+    return not same
+
+
 def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
              q0: dict | None = None, v0: dict | None = None, method: str = "exact",
-             speed_rpm: float = 0.0, **options) -> SimulationResult:
+             speed_rpm: float = 0.0, refreeze_deg: float = 2.0,
+             **options) -> SimulationResult:
     """Simulate the nonlinear contact dynamics of ``model`` from 0 to ``t_end`` (s).
 
     Parameters
@@ -84,7 +97,14 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     q0, v0 : initial displacements and velocities by DOF name (others 0). The initial contact
         state follows from ``q0`` (a contact is closed when it penetrates).
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``.
-    speed_rpm : input speed at which gyroscopic/centripetal terms are frozen.
+    speed_rpm : input speed at which gyroscopic/centripetal terms are frozen; the input
+        azimuth advances at it.
+    refreeze_deg : when the model's geometry depends on the input azimuth (a rotating carrier
+        against a fixed housing, anisotropic fixed supports of a rotating body), the matrices
+        are frozen at the middle of segments over which the azimuth turns by at most this many
+        degrees, and refrozen for the next segment (state carried over exactly). Segments are
+        whole output steps, so the effective tolerance is at least the azimuth of one ``dt``.
+        Smaller is more accurate and costs more exponentials; a measured knob (DESIGN 3.2).
     options : method options: ``max_events_per_step`` (exact), ``scipy_method``, ``rtol``,
         ``atol`` (scipy).
 
@@ -107,39 +127,73 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     n_steps = int(math.ceil(t_end / dt - 1e-9))
     if n_steps > 50_000_000:
         raise ModelError("dt", f"= {dt!r}: {n_steps} steps to {t_end} s is more than 5e7")
+    if not isinstance(refreeze_deg, (int, float)) or not refreeze_deg > 0:
+        raise ModelError("refreeze_deg", f"= {refreeze_deg!r}: must be a number > 0 deg")
     if isinstance(model, Assembly):
-        asm, name = model, ""
+        asm, name, segments = model, "", [(0, n_steps, model.azimuth)]
     elif isinstance(model, Model):
         asm, name = model.assemble(), model.name
+        om = float(speed_rpm) * 2 * math.pi / 60
+        if om > 0 and rotating_geometry(model):
+            per = max(1, int(math.floor(math.radians(refreeze_deg) / om / dt)))
+            segments = [(k, min(k + per, n_steps), om * dt * (k + min(k + per, n_steps)) / 2)
+                        for k in range(0, n_steps, per)]
+        else:
+            segments = [(0, n_steps, 0.0)]
     else:
         raise TypeError(f"expected a gm.Model, got {type(model).__name__}")
-    system = PiecewiseLinearSystem(asm, speed_rpm)
     t = np.arange(n_steps + 1) * dt
-    U = _load_grid(asm, loads, t)
-    F = U @ asm.B.T + system.f_const[None, :]
-    x0 = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
-    s0 = system.penetration(x0) > 0
     runner: Callable = METHODS[method]
+    x = None
+    s = None
+    Xs, Ss, events, stats_all = [], [], [], {}
     cpu = time.process_time()
-    X, S, events, stats = runner(system, dt, n_steps, F, x0, s0, **options)
-    stats = {**stats, "cpu_s": time.process_time() - cpu, "n_events": len(events),
-             "n_steps": n_steps}
-    return _result(system, t, X, S, events, s0, stats,
+    system0 = None
+    seg_systems = []
+    for k0, k1, azimuth in segments:
+        seg_asm = asm if len(segments) == 1 else model.assemble(azimuth=azimuth)
+        system = PiecewiseLinearSystem(seg_asm, speed_rpm)
+        if system0 is None:
+            system0 = system
+            x = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
+            s = system.penetration(x) > 0
+            s_init = s.copy()
+        ts = t[k0:k1 + 1]
+        U = _load_grid(seg_asm, loads, ts)
+        F = U @ seg_asm.B.T + system.f_const[None, :]
+        X, S, ev, st = runner(system, dt, k1 - k0, F, x, s, **options)
+        off = k0 * dt
+        events += [(te + off, *rest) for te, *rest in ev]
+        Xs.append(X if not Xs else X[1:])
+        Ss.append(S if not Ss else S[1:])
+        x, s = X[-1].copy(), S[-1].copy()
+        for key, val in st.items():
+            if isinstance(val, (int, float)):
+                stats_all[key] = stats_all.get(key, 0) + val
+        seg_systems.append((k0, k1, system))
+    X, S = np.concatenate(Xs), np.concatenate(Ss)
+    stats = {**stats_all, "cpu_s": time.process_time() - cpu, "n_events": len(events),
+             "n_steps": n_steps, "n_freezes": len(segments)}
+    return _result(seg_systems, t, X, S, events, s_init, stats,
                    {"model": name, "method": method, "t_end": t_end, "dt": dt,
-                    "speed_rpm": speed_rpm, "options": options,
+                    "speed_rpm": speed_rpm, "refreeze_deg": refreeze_deg, "options": options,
                     "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
                               for k, v in (loads or {}).items()},
                     "q0": q0 or {}, "v0": v0 or {}})
 
 
-def _result(system, t, X, S, events, s0, stats, settings) -> SimulationResult:
+def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResult:
+    system = seg_systems[0][2]
     asm = system.asm
     n = system.n
     q = pd.DataFrame(X[:, :n], index=pd.Index(t, name="time"), columns=asm.dof_names)
     v = pd.DataFrame(X[:, n:], index=q.index, columns=asm.dof_names)
     c = asm.contacts
-    P = X[:, :n] @ system.W.T - system.offset
-    R = X[:, n:] @ system.W.T
+    P = np.empty((len(t), system.n_contacts))
+    R = np.empty_like(P)
+    for k0, k1, sy in seg_systems:  # each segment with the geometry it was frozen at
+        P[k0:k1 + 1] = X[k0:k1 + 1, :n] @ sy.W.T - sy.offset
+        R[k0:k1 + 1] = X[k0:k1 + 1, n:] @ sy.W.T
     Fc = np.where(S, system.k * P + system.c * R, 0.0)
     cols: dict[str, np.ndarray] = {}
     for e, (el, ct, kind) in enumerate(zip(c.element, c.contact, c.kind, strict=True)):
@@ -151,7 +205,11 @@ def _result(system, t, X, S, events, s0, stats, settings) -> SimulationResult:
             cols[key] = cols.get(key, 0.0) + sign * Fc[:, e]
     sp = asm.springs
     if sp is not None and len(sp):
-        Fs = (X[:, :n] @ sp.W.T) * sp.stiffness + (X[:, n:] @ sp.W.T) * sp.damping
+        Fs = np.empty((len(t), len(sp)))
+        for k0, k1, sy in seg_systems:
+            w = sy.asm.springs.W
+            Fs[k0:k1 + 1] = ((X[k0:k1 + 1, :n] @ w.T) * sp.stiffness
+                             + (X[k0:k1 + 1, n:] @ w.T) * sp.damping)
         for e, (el, ct) in enumerate(zip(sp.element, sp.contact, strict=True)):
             cols[f"{el}.{ct}"] = Fs[:, e]
     forces = pd.DataFrame(cols, index=q.index)
