@@ -53,6 +53,22 @@ def candidate(ga, ra, gb, rb, L, margin):
 
 
 @numba.njit(cache=True)
+def _signed(W, off, sgn, x, n):
+    nc = W.shape[0]
+    g = np.empty(nc)
+    r = np.empty(nc)
+    for e in range(nc):
+        p = -off[e]
+        v = 0.0
+        for i in range(n):
+            p += W[e, i] * x[i]
+            v += W[e, i] * x[n + i]
+        g[e] = sgn[e] * p
+        r[e] = sgn[e] * v
+    return g, r
+
+
+@numba.njit(cache=True)
 def fast_steps(Phi, G0, G1, fs, F, k0, k_end, x, W, off, sgn, margin, dt, X):
     """Propagate from output step k0 with ``x`` while no contact is a candidate; rows
     ``X[k0 + 1 .. k]`` are written. Returns k, the index of the first step not taken (k_end
@@ -60,16 +76,7 @@ def fast_steps(Phi, G0, G1, fs, F, k0, k_end, x, W, off, sgn, margin, dt, X):
     N = x.shape[0]
     n = N // 2
     nc = W.shape[0]
-    ga = np.empty(nc)
-    ra = np.empty(nc)
-    for e in range(nc):
-        p = -off[e]
-        r = 0.0
-        for i in range(n):
-            p += W[e, i] * x[i]
-            r += W[e, i] * x[n + i]
-        ga[e] = sgn[e] * p
-        ra[e] = sgn[e] * r
+    ga, ra = _signed(W, off, sgn, x, n)
     x1 = np.empty(N)
     gb = np.empty(nc)
     rb = np.empty(nc)
@@ -183,22 +190,6 @@ def taylor_eval(Y, delta):
 @numba.njit(cache=True)
 def _piece(PHI, G0, G1, FS, j, x, Fa, Fb):
     return PHI[j] @ x + G0[j] @ Fa + G1[j] @ Fb + FS[j]
-
-
-@numba.njit(cache=True)
-def _signed(W, off, sgn, x, n):
-    nc = W.shape[0]
-    g = np.empty(nc)
-    r = np.empty(nc)
-    for e in range(nc):
-        p = -off[e]
-        v = 0.0
-        for i in range(n):
-            p += W[e, i] * x[i]
-            v += W[e, i] * x[n + i]
-        g[e] = sgn[e] * p
-        r[e] = sgn[e] * v
-    return g, r
 
 
 @numba.njit(cache=True)

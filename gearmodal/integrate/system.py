@@ -175,33 +175,3 @@ class Propagators:
         while rho * self.dt / 2**j > TAYLOR_REACH and j < 60:
             j += 1
         return j
-
-    def derivatives(self, s: np.ndarray, x: np.ndarray, F: np.ndarray, dF: np.ndarray):
-        """Taylor coefficients ``y_k = x^(k) / k!`` (k = 0..TAYLOR_TERMS-1) of the exact
-        solution at a point where the force is ``F`` with slope ``dF`` (per second)."""
-        d = self.state(s)
-        A = d["A"]
-        n = self.system.n
-        Minv = self.system.Minv
-        Y = np.empty((TAYLOR_TERMS, 2 * n))
-        Y[0] = x
-        y = A @ x
-        y[n:] += Minv @ (F + d["f"])
-        Y[1] = y
-        y = A @ y
-        y[n:] += Minv @ dF
-        Y[2] = y / 2.0
-        fact = 2.0
-        for k in range(3, TAYLOR_TERMS):
-            y = A @ y
-            fact *= k
-            Y[k] = y / fact
-        return Y
-
-
-def taylor_eval(Y: np.ndarray, delta: float) -> np.ndarray:
-    """``sum_k Y[k] delta^k`` by Horner's rule."""
-    out = Y[-1].copy()
-    for k in range(len(Y) - 2, -1, -1):
-        out = out * delta + Y[k]
-    return out
