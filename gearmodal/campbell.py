@@ -251,7 +251,6 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     n = asm.n
     M = asm.M
     solve = _sweep_solver(M, C, K, asm.G, asm.K_cent)
-    Mz = M.astype(complex)
     label = _labeller(asm)
     chunk = max(1, _LABEL_ENTRIES // max(n * n, 1))  # speeds labelled together
     pending = []  # (speed index, shape, M shape) not yet labelled
@@ -267,8 +266,8 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
         f = absl / (2 * math.pi)
         with np.errstate(invalid="ignore", divide="ignore"):
             z = np.where(absl > 0, -lam.real / np.where(absl > 0, absl, 1.0), 0.0)
-        Mphi = blas.zgemm(1.0, Mz, phi)  # M phi; see _sweep_solver on scipy's BLAS
-        norm = np.real(np.einsum("im,im->m", phi.conj(), Mphi))
+        Mphi = _matmul(M, phi)
+        norm = _re_dot(phi, Mphi)
         if prev is not None:
             # mac(prev, phi, M) with M prev and the norms kept from the previous speed
             mm = np.abs(blas.zgemm(1.0, prev_M, phi, trans_a=2)) ** 2 / np.outer(prev_norm, norm)
@@ -308,6 +307,11 @@ def _sweep_solver(M, C, K, G, Kc):
     ``[[0, I], [-(M^-1 K + speed^2 M^-1 K_cent), -(M^-1 C + speed M^-1 G)]]``; eigenvalues and
     shapes are selected and ordered exactly as ``eigensolve`` does. Speeds without a damping
     term (undamped at rest) go to ``eigensolve`` itself (the symmetric solver).
+
+    The state matrix goes straight to LAPACK ``dgeev`` (right eigenvectors, workspace size
+    queried once), which is what ``scipy.linalg.eig`` calls; of its real-format eigenvectors only
+    the displacement rows of the kept roots are made complex, as ``scipy.linalg.eig`` does for
+    all of them.
     """
     n = M.shape[0]
 
@@ -317,13 +321,17 @@ def _sweep_solver(M, C, K, G, Kc):
     MiK, MiC = minv(K), minv(C)
     MiG = minv(G) if G is not None else None
     MiKc = minv(Kc) if Kc is not None else None
+    A0 = np.zeros((2 * n, 2 * n), order="F")  # Fortran order: LAPACK works on it in place
+    A0[:n, n:] = np.eye(n)
+    geev, geev_lwork = sla.get_lapack_funcs(("geev", "geev_lwork"), (A0,))
+    work, info = geev_lwork(2 * n, compute_vl=0, compute_vr=1)
+    lwork = int(np.real(work)) if info == 0 else max(8 * n, 1)
 
     def solve(speed):
         D = C + (speed * G if G is not None and speed else 0.0)
         if not np.any(D):
             return eigensolve(M, C, K, G, speed, Kc)
-        A = np.zeros((2 * n, 2 * n))
-        A[:n, n:] = np.eye(n)
+        A = A0.copy(order="F")
         lower_k, lower_d = A[n:, :n], A[n:, n:]
         np.negative(MiK, out=lower_k)
         if MiKc is not None and speed:
@@ -331,7 +339,11 @@ def _sweep_solver(M, C, K, G, Kc):
         np.negative(MiC, out=lower_d)
         if MiG is not None and speed:
             lower_d -= speed * MiG
-        lam, vec = sla.eig(A, overwrite_a=True, check_finite=False)
+        wr, wi, _, vr, info = geev(A, compute_vl=0, compute_vr=1, lwork=lwork, overwrite_a=1)
+        if info != 0:
+            return eigensolve(M, C, K, G, speed, Kc)  # scipy.linalg.eig reports the failure
+        lam = np.empty(2 * n, dtype=complex)
+        lam.real, lam.imag = wr, wi
         # selection and order as in eigensolve: oscillatory roots with Im > 0, then the real
         # roots of smallest magnitude, one per DOF, ordered by |lambda|
         scale = max(1.0, float(np.max(np.abs(lam))))
@@ -340,11 +352,63 @@ def _sweep_solver(M, C, K, G, Kc):
         real = np.flatnonzero(~osc)
         real = real[np.argsort(np.abs(lam[real]), kind="stable")]
         keep = np.concatenate([pos, real[: max(0, n - len(pos))]])
-        lam, vec = lam[keep], vec[:n, keep]
-        order = np.argsort(np.abs(lam), kind="stable")
-        return lam[order], vec[:, order]
+        keep = keep[np.argsort(np.abs(lam[keep]), kind="stable")]
+        return lam[keep], _eigvecs(wi, vr, keep, n)
 
     return solve
+
+
+def _eigvecs(wi, vr, cols, rows):
+    """Columns ``cols`` (first ``rows`` rows) of the complex eigenvectors that
+    ``scipy.linalg.eig`` makes from LAPACK ``geev``'s real output: a complex pair ``j, j + 1``
+    (``wi[j] > 0``, scipy's marking) stored as ``vr[:, j] +- i vr[:, j + 1]``; real when every
+    root is real, as scipy returns them."""
+    if np.all(wi == 0.0):
+        return vr[:rows, cols]
+    first = wi > 0
+    first[:-1] |= wi[1:] < 0  # scipy's workaround for LAPACK (its ticket #709)
+    lead = np.flatnonzero(first)
+    if lead.size and (np.any(np.diff(lead) < 2) or lead[-1] == wi.size - 1):
+        # not clean pairs: scipy's own conversion, column by column
+        v = np.array(vr, dtype=complex)
+        for i in lead:
+            v.imag[:, i] = vr[:, i + 1]
+            np.conj(v[:, i], v[:, i + 1])
+        return v[:rows, cols]
+    second = np.zeros_like(first)
+    second[lead + 1] = True
+    out = np.empty((rows, len(cols)), dtype=complex)
+    re_cols = np.where(second[cols], cols - 1, cols)
+    out.real = vr[:rows, re_cols]
+    out.imag = 0.0
+    a, b = first[cols], second[cols]
+    out.imag[:, a] = vr[:rows, cols[a] + 1]
+    out.imag[:, b] = -vr[:rows, cols[b]]
+    return out
+
+
+def _matmul(R, X):
+    """``R @ X`` for a real matrix ``R`` and a real or complex ``X``, through scipy's BLAS.
+
+    numpy and scipy wheels each bundle an OpenBLAS with its own thread pool; calling numpy's
+    ``@`` between scipy's eigen-solves kept both pools' threads competing for the cores (a
+    68-DOF sweep on 2 cores ran 3x slower than with either pool on one thread), so the sweep
+    does all its matrix products in scipy's. A complex ``X`` is multiplied as its interleaved
+    real view, one ``dgemm`` with no copies: ``(R X)^T = X^T R^T``, both transposes Fortran-
+    ordered views of C-ordered arrays.
+    """
+    X = np.ascontiguousarray(X)
+    cplx = np.iscomplexobj(X)
+    Xr = X.view(np.float64) if cplx else X
+    out = blas.dgemm(1.0, Xr.T, np.ascontiguousarray(R).T).T
+    return out.view(np.complex128) if cplx else out
+
+
+def _re_dot(a, b):
+    """``Re(sum_i conj(a_im) b_im)`` per column ``m``."""
+    if not np.iscomplexobj(a):
+        return np.einsum("im,im->m", a, np.real(b))
+    return np.einsum("im,im->m", a.real, b.real) + np.einsum("im,im->m", a.imag, b.imag)
 
 
 def _label_speeds(label, pending, freqs, types):
@@ -352,18 +416,19 @@ def _label_speeds(label, pending, freqs, types):
     of them in one vectorised pass; a speed with a mode too close to a threshold to be sure is
     labelled by ``classify`` itself."""
     idx = [i for i, _, _ in pending]
-    phi = np.concatenate([p for _, p, _ in pending], axis=1)
-    Mphi = np.concatenate([mp for _, _, mp in pending], axis=1)
     f = freqs[idx]
-    fmax = np.repeat(np.max(f, axis=1), f.shape[1])
-    out, unsure = label(phi, Mphi, f.ravel(), fmax)
     n = f.shape[1]
-    for k, i in enumerate(idx):
-        cols = slice(k * n, (k + 1) * n)
-        if unsure[cols].any():
-            types[i] = label.exact(pending[k][1], freqs[i])
-        else:
-            types[i] = out[cols].tolist()
+    phi = np.empty((n, len(idx) * n), dtype=complex)  # C order: see _matmul
+    Mphi = np.empty_like(phi)
+    for k, (_, p, mp) in enumerate(pending):
+        phi[:, k * n:(k + 1) * n] = p
+        Mphi[:, k * n:(k + 1) * n] = mp
+    fmax = np.repeat(np.max(f, axis=1), n)
+    out, unsure = label(phi, Mphi, f.ravel(), fmax)
+    types[idx] = out.reshape(len(idx), n)
+    for k in np.flatnonzero(unsure.reshape(len(idx), n).any(axis=1)):
+        i = idx[k]
+        types[i] = label.exact(pending[k][1], freqs[i])
 
 
 def _labeller(asm, rigid_rel: float = 1e-6):
@@ -382,7 +447,7 @@ def _labeller(asm, rigid_rel: float = 1e-6):
     """
     K = asm.stiffness()
     M = asm.M
-    absK, absM, Kz = np.abs(K), np.abs(M), K.astype(complex)
+    absK, absM = np.abs(K), np.abs(M)
     names = asm.dof_names
     n = len(names)
     rot = np.array([nm.rsplit(".", 1)[1] in ("theta", "u") for nm in names], dtype=bool)
@@ -409,24 +474,24 @@ def _labeller(asm, rigid_rel: float = 1e-6):
     def label(phi, Mphi, freq_hz, fmax):
         nm = phi.shape[1]
         # rigid: stiffness Rayleigh quotient num / den (as a frequency) below rigid_rel * fmax
-        num = np.real(np.einsum("im,im->m", phi.conj(), blas.zgemm(1.0, Kz, phi)))
-        den = np.real(np.einsum("im,im->m", phi.conj(), Mphi))
+        num = _re_dot(phi, _matmul(K, phi))
+        den = _re_dot(phi, Mphi)
         thr = rigid_rel * fmax
         # classify: static_hz < thr, never true for thr <= 0 (static_hz >= 0)
         aphi = np.abs(phi)
         q = (2 * np.pi * thr) ** 2
         d = num - q * den
-        bound = (gamma * (np.einsum("im,im->m", aphi, blas.dgemm(1.0, absK, aphi))
-                          + q * np.einsum("im,im->m", aphi, blas.dgemm(1.0, absM, aphi)))
+        bound = (gamma * (np.einsum("im,im->m", aphi, _matmul(absK, aphi))
+                          + q * np.einsum("im,im->m", aphi, _matmul(absM, aphi)))
                  + 16 * eps * q * np.abs(den))
         rigid = (d < 0) & (thr > 0)
         unsure = (thr > 0) & ~(np.abs(d) > bound)  # also catches NaN
         # kinetic energy share per DOF, as modetypes.dof_energy
-        e = np.real(phi.conj() * Mphi)
+        e = phi.real * Mphi.real + phi.imag * Mphi.imag  # Re(conj(phi) M phi)
         tot = e.sum(axis=0, keepdims=True)
         e = np.divide(e, tot, out=np.zeros_like(e), where=tot > 0)
         tol = gamma * np.abs(e).sum(axis=0)
-        g = blas.dgemm(1.0, S, e)
+        g = _matmul(S, e)
         out = np.full(nm, "mixed", dtype=object)
         open_ = np.ones(nm, dtype=bool)
 
