@@ -41,15 +41,17 @@ def hermite_max(g0, d0, g1, d1, L):
 @numba.njit(cache=True)
 def candidate(ga, ra, gb, rb, L, margin):
     """True if a contact whose signed gap g (> 0 means it must switch) goes from (ga, ra) to
-    (gb, rb) over a piece of length L may change state inside the piece: a sign change, or an
-    approach turning into a recession whose Hermite interpolant comes within ``margin`` times
-    the rate scale of contact."""
+    (gb, rb) over a piece of length L may change state inside the piece: a sign change, or a
+    Hermite interpolant of the end values and rates that comes within ``margin`` times the rate
+    scale of contact. The interpolant is tested whatever the signs of the end rates: a gap that
+    rises and falls back (a cubic under a linearly varying load in free flight, or a drift
+    plus a fast mode) can have rates of one sign at both ends."""
     if gb > 0.0:
         return True
-    if ra > 0.0 and rb < 0.0:
-        scale = abs(ra * L) + abs(rb * L)
-        return hermite_max(ga, ra, gb, rb, L) > -margin * scale
-    return False
+    scale = abs(ra * L) + abs(rb * L)
+    if scale == 0.0:
+        return False
+    return hermite_max(ga, ra, gb, rb, L) > -margin * scale
 
 
 @numba.njit(cache=True)
@@ -126,26 +128,58 @@ def taylor_coefficients(A, Minv, x, F, dF, fcon, n_terms):
     Y[1, :] = y
     y = A @ y
     y[n:] += Minv @ dF
-    fact = 2.0
-    Y[2, :] = y / fact
+    Y[2, :] = y / 2.0
+    # y_k = A y_(k-1) / k: the factorial is divided out as we go, so that stiff states
+    # (large rho) do not overflow the intermediate powers
     for k in range(3, n_terms):
-        y = A @ y
-        fact *= k
-        Y[k, :] = y / fact
+        Y[k, :] = (A @ Y[k - 1]) / k
     return Y
+
+
+@numba.njit(cache=True)
+def _poly(coef, t):
+    m = coef.shape[0]
+    g = coef[m - 1]
+    for k in range(m - 2, -1, -1):
+        g = g * t + coef[k]
+    return g
+
+
+@numba.njit(cache=True)
+def _dpoly(coef, t):
+    m = coef.shape[0]
+    g = (m - 1) * coef[m - 1]
+    for k in range(m - 2, 0, -1):
+        g = g * t + k * coef[k]
+    return g
+
+
+@numba.njit(cache=True)
+def _bisect_up(coef, lo, hi):
+    """Last representable bracket of a crossing from <= 0 at lo to > 0 at hi; returns hi."""
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if mid <= lo or mid >= hi:
+            break
+        if _poly(coef, mid) > 0.0:
+            hi = mid
+        else:
+            lo = mid
+    return hi
 
 
 @numba.njit(cache=True)
 def poly_first_root(coef, L, n_samples):
     """First crossing of ``g(t) = sum coef[k] t^k`` from <= 0 to > 0 in [0, L]; ``inf`` if
-    none. Immediately 0 when g(0) > 0 and g'(0) > 0. Bracketed on ``n_samples`` points, then
-    bisection to the last representable time."""
+    none. Immediately 0 when g is due at t = 0 (positive and rising, or touching with its first
+    nonzero derivative pointing inwards). The samples bracket sign changes; between two
+    non-positive samples whose derivatives go from rising to falling, the maximum is located
+    on the derivative, so that a positive bump narrower than the sample spacing is found."""
     m = coef.shape[0]
     g0 = coef[0]
     if g0 > 0.0 and coef[1] > 0.0:
         return 0.0
     if g0 == 0.0:
-        # touching at the start: due now if the first nonzero derivative points inwards
         for k in range(1, m):
             if coef[k] != 0.0:
                 if coef[k] > 0.0:
@@ -153,26 +187,28 @@ def poly_first_root(coef, L, n_samples):
                 break
     prev_t = 0.0
     prev_g = g0
+    prev_d = coef[1]
     for i in range(1, n_samples):
         t = L * i / (n_samples - 1)
-        g = coef[m - 1]
-        for k in range(m - 2, -1, -1):
-            g = g * t + coef[k]
+        g = _poly(coef, t)
+        d = _dpoly(coef, t)
         if g > 0.0 and prev_g <= 0.0:
-            lo, hi = prev_t, t
+            return _bisect_up(coef, prev_t, t)
+        if g <= 0.0 and prev_g <= 0.0 and prev_d > 0.0 and d < 0.0:
+            lo, hi = prev_t, t  # derivative + at lo, - at hi: a maximum inside
             for _ in range(200):
                 mid = 0.5 * (lo + hi)
                 if mid <= lo or mid >= hi:
                     break
-                gm = coef[m - 1]
-                for k in range(m - 2, -1, -1):
-                    gm = gm * mid + coef[k]
-                if gm > 0.0:
-                    hi = mid
-                else:
+                if _dpoly(coef, mid) > 0.0:
                     lo = mid
-            return hi
-        prev_t, prev_g = t, g
+                else:
+                    hi = mid
+            if _poly(coef, hi) > 0.0:
+                return _bisect_up(coef, prev_t, hi)
+            if _poly(coef, lo) > 0.0:
+                return _bisect_up(coef, prev_t, lo)
+        prev_t, prev_g, prev_d = t, g, d
     return np.inf
 
 

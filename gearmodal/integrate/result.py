@@ -119,7 +119,8 @@ class SimulationResult:
         """Per-planet share of the load carried by the sun-planet meshes over time.
 
         Columns ``<stage>.planetN`` (share of the stage's total sun-planet flank force,
-        front minus back) and ``<stage>.factor`` = N * the largest share (1 = equal sharing).
+        front minus back; NaN where that total is below 1e-3 of its maximum) and
+        ``<stage>.factor`` = N * the largest share (1 = equal sharing).
         ``result.attrs["peak_factor"]`` holds the peak factor of each stage.
         """
         cols = [c for c in self.forces.columns if re.search(r"sun_planet\d+\.front$", c)]
@@ -133,8 +134,10 @@ class SimulationResult:
             net = np.column_stack([self.forces[f"{m}.front"] - self.forces[f"{m}.back"]
                                    for m in meshes])
             tot = net.sum(axis=1, keepdims=True)
+            # where the stage carries (almost) no load, shares are undefined (rattle, start)
+            loaded = np.abs(tot) > 1e-3 * max(float(np.abs(tot).max(initial=0.0)), 1e-300)
             with np.errstate(invalid="ignore", divide="ignore"):
-                share = np.where(np.abs(tot) > 0, net / np.where(tot == 0, 1, tot), np.nan)
+                share = np.where(loaded, net / np.where(loaded, tot, 1.0), np.nan)
             prefix = f"{stage}." if stage else ""
             for i, m in enumerate(meshes):
                 out[f"{prefix}{_planet_of(m)}"] = share[:, i]
