@@ -233,8 +233,11 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
         drivetrain).
     speeds_rpm : increasing speeds, rpm (>= 0).
     orders : ``{name: order}`` excitation orders (default :func:`default_orders`).
-    loads : reserved for the loaded contact state (not yet supported).
-    state : contact state (default nominal).
+    loads : ``{load name: value}`` (N, N m). When given, the static equilibrium under these
+        loads and the centrifugal forces is solved at every speed
+        (:func:`gearmodal.static.equilibrium`) and the modes are those of its contact state;
+        ``result.extra["states"]`` keeps the state per speed.
+    state : contact state (default nominal; with loads, the equilibrium's starting guess).
     progress : optional callable ``progress(i, n)`` called after each speed (the CLI passes a
         progress bar; the solver never prints).
     """
@@ -243,14 +246,25 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     s = np.asarray(speeds_rpm, dtype=float).ravel()
     if s.size < 2 or not np.all(np.isfinite(s)) or np.any(s < 0) or np.any(np.diff(s) <= 0):
         raise ModelError("speeds_rpm", "must be at least two finite, increasing speeds >= 0 rpm")
-    if loads:
-        raise ModelError("loads", "loaded Campbell diagrams are not implemented yet")
     asm = model.assemble()
-    st = asm.state(state)
-    K, C = asm.stiffness(st), asm.damping(st)
+    if loads:
+        from .static import equilibrium
+
+        states = [equilibrium(asm, loads, rpm, state=state).state for rpm in s]
+    else:
+        states = [asm.state(state)] * s.size
     n = asm.n
     M = asm.M
-    solve = _sweep_solver(M, C, K, asm.G, asm.K_cent)
+    solvers: dict[bytes, object] = {}
+
+    def solve_at(i, om):
+        st = states[i]
+        key = st.tobytes()
+        if key not in solvers:  # one precomputed solver per contact state met in the sweep
+            solvers[key] = _sweep_solver(M, asm.damping(st), asm.stiffness(st), asm.G,
+                                         asm.K_cent)
+        return solvers[key](om)
+
     label = _labeller(asm)
     chunk = max(1, _LABEL_ENTRIES // max(n * n, 1))  # speeds labelled together
     pending = []  # (speed index, shape, M shape) not yet labelled
@@ -261,7 +275,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     shapes = []
     prev = prev_M = prev_norm = None
     for i, rpm in enumerate(s):
-        lam, phi = solve(rpm * RPM)
+        lam, phi = solve_at(i, rpm * RPM)
         absl = np.abs(lam)
         f = absl / (2 * math.pi)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -295,7 +309,8 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
                           mode_types=types, macs=macs, veering=veer, orders=order_map,
                           speed_range_rpm=model.speed_range_rpm, model_name=model.name,
                           extra={"veerings": [(s[i], a, b, fr, gap, m)
-                                              for i, a, b, fr, gap, m in found]})
+                                              for i, a, b, fr, gap, m in found],
+                                 "states": np.array(states)})
 
 
 def _sweep_solver(M, C, K, G, Kc):

@@ -34,6 +34,25 @@ def _default_speeds(model) -> np.ndarray:
     return np.linspace(0.0, top or 100.0, 61)
 
 
+def _loads(args, model) -> dict | None:
+    """``--load NAME=VALUE`` (repeatable) and ``--balance NAME`` into a loads dict."""
+    loads = {}
+    for item in args.load or []:
+        name, sep, value = item.partition("=")
+        try:
+            loads[name.strip()] = float(value)
+        except ValueError:
+            raise ModelError("--load", f"= {item!r}: expected NAME=VALUE, e.g. "
+                             "rotor.torque=2.6e5") from None
+        if not sep:
+            raise ModelError("--load", f"= {item!r}: expected NAME=VALUE")
+    if args.balance:
+        from .static import balance
+
+        loads = balance(model, loads, on=args.balance)
+    return loads or None
+
+
 def _load(path: str):
     from .model.toml_io import load
 
@@ -49,11 +68,12 @@ def cmd_campbell(args) -> int:
 
     model = _load(args.model)
     speeds = _speeds(args.speeds) if args.speeds else _default_speeds(model)
+    loads = _loads(args, model)
     with tqdm(total=len(speeds), desc="Campbell sweep", unit="speed",
               disable=args.quiet) as bar:
-        camp = campbell(model, speeds, progress=lambda i, n: bar.update(1))
+        camp = campbell(model, speeds, loads=loads, progress=lambda i, n: bar.update(1))
     rated = model.rated_speed_rpm if model.rated_speed_rpm is not None else float(speeds[-1])
-    res = modal(model, speed_rpm=rated)
+    res = modal(model, speed_rpm=rated, loads=loads)
     out = write_campbell_report(camp, res, args.out, summary=model.summary())
     print(f"wrote {out}/report.html")
     return 0
@@ -65,7 +85,7 @@ def cmd_modal(args) -> int:
 
     model = _load(args.model)
     speed = args.speed if args.speed is not None else (model.rated_speed_rpm or 0.0)
-    res = modal(model, speed_rpm=speed)
+    res = modal(model, speed_rpm=speed, loads=_loads(args, model))
     out = write_modal_report(res, args.out, summary=model.summary())
     print(f"wrote {out}/report.html")
     return 0
@@ -113,11 +133,20 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--out", required=True, help="output folder")
     c.add_argument("--speeds", help="input speeds A:B:N in rpm (default 0 to 1.2 x range)")
     c.add_argument("--quiet", action="store_true", help="no progress bar")
+    for sp in (c,):
+        sp.add_argument("--load", action="append", metavar="NAME=VALUE",
+                        help="a load in N or N m (repeatable): the modes are those of the "
+                             "loaded contact state")
+        sp.add_argument("--balance", metavar="NAME",
+                        help="set this load so that the loads are in equilibrium")
     c.set_defaults(func=cmd_campbell)
     m = sub.add_parser("modal", help="modes at one speed, with report")
     m.add_argument("model")
     m.add_argument("--out", required=True)
     m.add_argument("--speed", type=float, help="input speed in rpm (default: rated)")
+    m.add_argument("--load", action="append", metavar="NAME=VALUE",
+                   help="a load in N or N m (repeatable)")
+    m.add_argument("--balance", metavar="NAME", help="set this load to balance the others")
     m.set_defaults(func=cmd_modal)
     sm = sub.add_parser("simulate", help="simulate a scene (model + loads + solver settings)")
     sm.add_argument("scene", help="scene file (TOML), see gearmodal/scene.py")
