@@ -164,6 +164,16 @@ class Assembly:
         return f
 
 
+def as_assembly(model) -> tuple[Assembly, str]:
+    """``(assembly, model name)`` of a :class:`Model` (assembled at azimuth 0) or of an
+    already assembled :class:`Assembly` (name ``""``)."""
+    if isinstance(model, Assembly):
+        return model, ""
+    if isinstance(model, Model):
+        return model.assemble(), model.name
+    raise TypeError(f"expected a gm.Model or gm.Assembly, got {type(model).__name__}")
+
+
 def _rz(a: float) -> np.ndarray:
     c, s = math.cos(a), math.sin(a)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])

@@ -17,9 +17,8 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from .assembly import Assembly
+from .assembly import Assembly, as_assembly
 from .errors import ModelError
-from .model.model import Model
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
@@ -123,14 +122,6 @@ def _real_shape(v: np.ndarray) -> np.ndarray:
     return np.real(v * np.conj(v[j]) / np.abs(v[j]))
 
 
-def _as_assembly(model) -> tuple[Assembly, str]:
-    if isinstance(model, Assembly):
-        return model, ""
-    if isinstance(model, Model):
-        return model.assemble(), model.name
-    raise TypeError(f"expected a gm.Model or gm.Assembly, got {type(model).__name__}")
-
-
 def eigensolve(M, C, K, G=None, speed=0.0, Kc=None):
     """Eigenvalues ``lambda`` (n,) and displacement shapes (n, n) of the quadratic problem
     ``(lambda^2 M + lambda (C + speed G) + K + speed^2 Kc) phi = 0``, one per DOF, ordered by
@@ -186,7 +177,7 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     speed_rpm = float(speed_rpm)
     if not math.isfinite(speed_rpm) or speed_rpm < 0:
         raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number >= 0 rpm")
-    asm, name = _as_assembly(model)
+    asm, name = as_assembly(model)
     om = speed_rpm * RPM
     eq = None
     if loads:

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from .assembly import Assembly
+from .assembly import Assembly, as_assembly
 from .errors import ModelError
 
 RPM = 2.0 * np.pi / 60.0
@@ -64,7 +64,7 @@ def balance(model, loads: dict, on: str) -> dict:
 
     ``model`` is a :class:`gearmodal.Model` or an :class:`Assembly`.
     """
-    asm = _assembly(model)
+    asm, _ = as_assembly(model)
     modes = free_modes(asm)
     if modes.shape[1] != 1:
         raise ModelError("balance", f"needs exactly one free mode, the model has "
@@ -80,16 +80,6 @@ def balance(model, loads: dict, on: str) -> dict:
     return {**rest, on: float(-work / unit)}
 
 
-def _assembly(model) -> Assembly:
-    if isinstance(model, Assembly):
-        return model
-    from .model.model import Model
-
-    if isinstance(model, Model):
-        return model.assemble()
-    raise TypeError(f"expected a gm.Model or gm.Assembly, got {type(model).__name__}")
-
-
 def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
                 state=None, max_iter: int = 200, rtol: float = 1e-12) -> Equilibrium:
     """Static equilibrium of ``model`` (a Model or an Assembly) under ``loads``
@@ -99,7 +89,7 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
     Raises :class:`ModelError` when the loads do work on a free rigid-body mode (they are not
     balanced; see :func:`balance`) or when no equilibrium is found within ``max_iter`` steps.
     """
-    asm = _assembly(model)
+    asm, _ = as_assembly(model)
     om = float(speed_rpm) * RPM
     K = asm.K + om**2 * asm.K_cent
     f = asm.load_vector(loads) + om**2 * asm.f_cent
