@@ -112,6 +112,19 @@ class PiecewiseLinearSystem:
                      + 0.5 * np.sum(self.k * p * p) - self.f_const @ q)
 
 
+def double_step(Phi: np.ndarray, G0: np.ndarray, G1: np.ndarray):
+    """Propagators of the step ``2h`` from those of ``h`` (first-order hold), exactly.
+
+    Two steps with the force linear from F0 over Fm = (F0 + F2) / 2 to F2::
+
+        x(2h) = Phi^2 x0 + Phi G0 F0 + (Phi G1 + G0) Fm + G1 F2
+        => Phi' = Phi^2,  G0' = Phi G0 + (Phi G1 + G0) / 2,  G1' = (Phi G1 + G0) / 2 + G1
+
+    (the squaring step of scaling-and-squaring, carried to the hold terms)."""
+    H = 0.5 * (Phi @ G1 + G0)
+    return Phi @ Phi, Phi @ G0 + H, H + G1
+
+
 class Propagators:
     """Per contact state: ``A_s``, ``f_s``, spectral radius and dyadic step propagators."""
 
@@ -134,26 +147,41 @@ class Propagators:
 
     def level(self, s: np.ndarray, j: int):
         """``(Phi, G0, G1)`` for the step ``dt / 2**j`` in state ``s``: x(h) = Phi x0 + G0 F0
-        + G1 F1 (F the generalised force, first-order hold)."""
+        + G1 F1 (F the generalised force, first-order hold).
+
+        One augmented exponential per state, at the finest level the state needs (its Taylor
+        level, or ``j`` if finer); coarser levels follow by exact doubling, see
+        :func:`double_step`."""
         d = self.state(s)
-        got = d["levels"].get(j)
+        levels = d["levels"]
+        got = levels.get(j)
         if got is None:
-            sys = self.system
-            h = self.dt / 2**j
-            N, n = 2 * sys.n, sys.n
-            Z = np.zeros((N + 2 * n, N + 2 * n))
-            Z[:N, :N] = d["A"] * h
-            Z[n:N, N:N + n] = sys.Minv * h
-            Z[N:N + n, N + n:] = np.eye(n)
-            E = sla.expm(Z)
-            self.n_exponentials += 1
-            Phi = E[:N, :N]
-            Ga = E[:N, N:N + n]
-            Gb = E[:N, N + n:]
-            got = (np.ascontiguousarray(Phi), np.ascontiguousarray(Ga - Gb),
-                   np.ascontiguousarray(Gb))
-            d["levels"][j] = got
+            finer = [k for k in levels if k > j]
+            if finer:
+                k = min(finer)
+            else:
+                k = max(j, self.taylor_level(s))
+                levels[k] = self._exponential(d["A"], self.dt / 2**k)
+            while k > j:
+                levels[k - 1] = double_step(*levels[k])
+                k -= 1
+            got = levels[j]
         return got
+
+    def _exponential(self, A: np.ndarray, h: float):
+        """Van Loan's augmented exponential (module docstring) over one step ``h``."""
+        sys = self.system
+        N, n = 2 * sys.n, sys.n
+        Z = np.zeros((N + 2 * n, N + 2 * n))
+        Z[:N, :N] = A * h
+        Z[n:N, N:N + n] = sys.Minv * h
+        Z[N:N + n, N + n:] = np.eye(n)
+        E = sla.expm(Z)
+        self.n_exponentials += 1
+        Ga = E[:N, N:N + n]
+        Gb = E[:N, N + n:]
+        return (np.ascontiguousarray(E[:N, :N]), np.ascontiguousarray(Ga - Gb),
+                np.ascontiguousarray(Gb))
 
     def resolve_level(self, s: np.ndarray) -> int:
         """Smallest dyadic level whose step is at most half the fastest period of state ``s``
