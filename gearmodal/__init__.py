@@ -6,6 +6,16 @@ piecewise-linear contact model, modal and Campbell analysis. SI units throughout
 
 from .assembly import Assembly, assemble
 from .campbell import CampbellResult, campbell
+from .coupling import (
+    Constraint,
+    Coupled,
+    CoupledAssembly,
+    Joint,
+    LinearConstraint,
+    LinearSystem,
+    ModelSystem,
+    System,
+)
 from .errors import ModelError
 from .integrate import SimulationResult, simulate
 from .modal import ModalResult, modal
@@ -30,7 +40,9 @@ from .static import Equilibrium, balance, equilibrium
 
 __version__ = "0.1.0"
 
-__all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Equilibrium", "Frame",
+__all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Constraint", "Coupled",
+           "CoupledAssembly", "Equilibrium", "Frame", "Joint", "LinearConstraint",
+           "LinearSystem", "ModelSystem", "System",
            "Gear", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
            "SimulationResult", "simulate",
            "assemble", "balance", "campbell", "drivetrain", "equilibrium", "gear_pair",

@@ -165,13 +165,27 @@ class Assembly:
 
 
 def as_assembly(model) -> tuple[Assembly, str]:
-    """``(assembly, model name)`` of a :class:`Model` (assembled at azimuth 0) or of an
-    already assembled :class:`Assembly` (name ``""``)."""
+    """``(assembly, model name)`` of a :class:`Model` or a :class:`gearmodal.Coupled` system
+    (assembled at azimuth 0) or of an already assembled :class:`Assembly` (name ``""``)."""
     if isinstance(model, Assembly):
         return model, ""
     if isinstance(model, Model):
         return model.assemble(), model.name
-    raise TypeError(f"expected a gm.Model or gm.Assembly, got {type(model).__name__}")
+    from .coupling import Coupled
+
+    if isinstance(model, Coupled):
+        return model.assemble(), model.name
+    raise TypeError(f"expected a gm.Model, gm.Coupled or gm.Assembly, got "
+                    f"{type(model).__name__}")
+
+
+def reduction(asm: Assembly) -> tuple[Assembly, np.ndarray | None]:
+    """``(assembly to solve, N)``: a coupled assembly's projection on its constrained
+    coordinates ``q = N z`` (:mod:`gearmodal.coupling`), or ``(asm, None)``."""
+    N = getattr(asm, "N", None)
+    if N is None:
+        return asm, None
+    return asm.reduced(), N
 
 
 def _rz(a: float) -> np.ndarray:

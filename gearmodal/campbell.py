@@ -20,6 +20,7 @@ import scipy.linalg as sla
 from scipy.linalg import blas
 from scipy.optimize import linear_sum_assignment
 
+from .assembly import reduction
 from .errors import ModelError
 from .modal import RPM, eigensolve
 from .model.components import Gear
@@ -48,7 +49,7 @@ def mac(phi: np.ndarray, psi: np.ndarray, M: np.ndarray | None = None) -> np.nda
 def default_orders(model: Model) -> dict[str, float]:
     """Excitation orders (per revolution of the input) from the model's content."""
     orders: dict[str, float] = {"1P": 1.0}
-    if "rotor" in model.bodies:
+    if any(b == "rotor" or b.endswith(".rotor") for b in model.bodies):
         orders["3P"] = 3.0
     for m in model.meshes.values():
         a = model.bodies[m.gear_a]
@@ -241,28 +242,31 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     progress : optional callable ``progress(i, n)`` called after each speed (the CLI passes a
         progress bar; the solver never prints).
     """
-    if not isinstance(model, Model):
-        raise TypeError(f"expected a gm.Model, got {type(model).__name__}")
+    from .coupling import Coupled
+
+    if not isinstance(model, (Model, Coupled)):
+        raise TypeError(f"expected a gm.Model or gm.Coupled, got {type(model).__name__}")
     s = np.asarray(speeds_rpm, dtype=float).ravel()
     if s.size < 2 or not np.all(np.isfinite(s)) or np.any(s < 0) or np.any(np.diff(s) <= 0):
         raise ModelError("speeds_rpm", "must be at least two finite, increasing speeds >= 0 rpm")
     asm = model.assemble()
+    red, N = reduction(asm)  # a coupled system is solved in its constrained coordinates
     if loads:
         from .static import equilibrium
 
         states = [equilibrium(asm, loads, rpm, state=state).state for rpm in s]
     else:
         states = [asm.state(state)] * s.size
-    n = asm.n
-    M = asm.M
+    n = red.n
+    M = red.M
     solvers: dict[bytes, object] = {}
 
     def solve_at(i, om):
         st = states[i]
         key = st.tobytes()
         if key not in solvers:  # one precomputed solver per contact state met in the sweep
-            solvers[key] = _sweep_solver(M, asm.damping(st), asm.stiffness(st), asm.G,
-                                         asm.K_cent)
+            solvers[key] = _sweep_solver(M, red.damping(st), red.stiffness(st), red.G,
+                                         red.K_cent)
         return solvers[key](om)
 
     label = _labeller(asm)
@@ -293,15 +297,20 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
             macs.append(mm)
         freqs[i], zetas[i] = f, z
         shapes.append(phi)
-        pending.append((i, phi, Mphi))
+        if N is None:
+            pending.append((i, phi, Mphi))
+        else:  # labels from the shapes in the original coordinates
+            full = N @ phi
+            pending.append((i, full, _matmul(asm.M, full)))
         if len(pending) == chunk or i == s.size - 1:
             _label_speeds(label, pending, freqs, types)
             pending = []
         prev, prev_M, prev_norm = phi, Mphi, norm
         if progress is not None:
             progress(i + 1, s.size)
-    order_map = default_orders(model) if orders is None else dict(orders)
-    found = _find_veerings(s, freqs, shapes, asm.M)
+    base = model.merged if isinstance(model, Coupled) else model
+    order_map = default_orders(base) if orders is None else dict(orders)
+    found = _find_veerings(s, freqs, shapes, M)
     veer = np.zeros((s.size, n), dtype=bool)
     for i, a, b, *_ in found:
         veer[i, a] = veer[i, b] = True
@@ -432,8 +441,9 @@ def _label_speeds(label, pending, freqs, types):
     labelled by ``classify`` itself."""
     idx = [i for i, _, _ in pending]
     f = freqs[idx]
-    n = f.shape[1]
-    phi = np.empty((n, len(idx) * n), dtype=complex)  # C order: see _matmul
+    n = f.shape[1]  # modes per speed
+    nd = pending[0][1].shape[0]  # coordinates (more than modes for a coupled system)
+    phi = np.empty((nd, len(idx) * n), dtype=complex)  # C order: see _matmul
     Mphi = np.empty_like(phi)
     for k, (_, p, mp) in enumerate(pending):
         phi[:, k * n:(k + 1) * n] = p

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from .assembly import Assembly, as_assembly
+from .assembly import Assembly, as_assembly, reduction
 from .errors import ModelError
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
@@ -156,7 +156,8 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
 
     Parameters
     ----------
-    model : a :class:`gearmodal.Model` (or an already assembled :class:`Assembly`).
+    model : a :class:`gearmodal.Model`, a :class:`gearmodal.Coupled` system (modes of the
+        constrained motion, shapes in the original coordinates) or an :class:`Assembly`.
     speed_rpm : input speed in rpm (gyroscopic and centripetal terms scale with it).
     loads : ``{load name: value}`` (N, N m). When given, the static equilibrium under these
         loads (and the centrifugal forces at ``speed_rpm``) is solved first and the modes are
@@ -178,6 +179,7 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     if not math.isfinite(speed_rpm) or speed_rpm < 0:
         raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number >= 0 rpm")
     asm, name = as_assembly(model)
+    red, N = reduction(asm)  # a coupled system is solved in its constrained coordinates
     om = speed_rpm * RPM
     eq = None
     if loads:
@@ -186,9 +188,9 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
         eq = equilibrium(asm, loads, speed_rpm, state=state)
         state = eq.state
     s = asm.state(state)
-    K = asm.stiffness(s)
-    C = asm.damping(s)
-    lam, shapes = eigensolve(asm.M, C, K, asm.G, om, asm.K_cent)
+    lam, shapes = eigensolve(red.M, red.damping(s), red.stiffness(s), red.G, om, red.K_cent)
+    if N is not None:
+        shapes = N @ shapes
     absl = np.abs(lam)
     freq = absl / (2 * math.pi)
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from .assembly import Assembly, as_assembly
+from .assembly import Assembly, as_assembly, reduction
 from .errors import ModelError
 
 RPM = 2.0 * np.pi / 60.0
@@ -89,7 +89,8 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
     Raises :class:`ModelError` when the loads do work on a free rigid-body mode (they are not
     balanced; see :func:`balance`) or when no equilibrium is found within ``max_iter`` steps.
     """
-    asm, _ = as_assembly(model)
+    full, _ = as_assembly(model)
+    asm, N = reduction(full)
     om = float(speed_rpm) * RPM
     K = asm.K + om**2 * asm.K_cent
     f = asm.load_vector(loads) + om**2 * asm.f_cent
@@ -153,5 +154,7 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
     force = np.where(s, k * p, 0.0)
     df = pd.DataFrame({"element": c.element, "contact": c.contact, "active": s,
                        "penetration_m": p, "force_N": force})
-    return Equilibrium(q=pd.Series(q, index=asm.dof_names), state=s, contacts=df,
+    if N is not None:  # coupled: back to the original coordinates
+        q = full.expand(q)
+    return Equilibrium(q=pd.Series(q, index=full.dof_names), state=s, contacts=df,
                        iterations=iterations)

@@ -50,7 +50,8 @@ _DOCS = {
 
 
 def derive() -> dict[str, sp.Matrix]:
-    """Return the exact residual ``g`` (6,) and the gradients ``Ga``, ``Gb`` (6, 6) at 0."""
+    """Return the exact residual ``g`` (6,), its gradients ``Ga``, ``Gb`` (6, 6) at 0 and
+    ``Ga_q``, ``Gb_q`` at any ``q``."""
     E = Rz(gamma)
     pa = sp.Matrix([pax, pay, paz])
     pb = sp.Matrix([pbx, pby, pbz])
@@ -60,12 +61,15 @@ def derive() -> dict[str, sp.Matrix]:
     dpb = ub + (Rs(rb) - sp.eye(3)) @ pb
     g = sp.Matrix.vstack(E.T @ (dpa - dpb), E.T @ (sp.Matrix(ra) - sp.Matrix(rb)))
     zero = dict.fromkeys(QA + QB, 0)
-    Ga = g.jacobian(QA).subs(zero)
-    Gb = g.jacobian(QB).subs(zero)
+    Ga_q = g.jacobian(QA)
+    Gb_q = g.jacobian(QB)
+    Ga = Ga_q.subs(zero)
+    Gb = Gb_q.subs(zero)
     gaps = sp.Matrix([sign * g[i] - CLEAR[i] for i in range(6) for sign in (1, -1)])
     Ja = gaps.jacobian(QA).subs(zero)
     Jb = gaps.jacobian(QB).subs(zero)
-    return {"g": g, "Ga": Ga, "Gb": Gb, "gaps": gaps, "Ja": Ja, "Jb": Jb}
+    return {"g": g, "Ga": Ga, "Gb": Gb, "Ga_q": Ga_q, "Gb_q": Gb_q, "gaps": gaps, "Ja": Ja,
+            "Jb": Jb}
 
 
 def kernels() -> list[Kernel]:
@@ -88,6 +92,14 @@ def kernels() -> list[Kernel]:
             [d["Ga"], d["Gb"]],
             "Constraint gradients (Ga, Gb), each (6, 6): dg/dq_a and dg/dq_b at q = 0 "
             "(DESIGN 2.5).",
+            output_names=["Ga", "Gb"],
+        ),
+        Kernel(
+            "joint_gradients_at",
+            [qa, qb, *geo],
+            [d["Ga_q"], d["Gb_q"]],
+            "Constraint gradients (Ga, Gb), each (6, 6), of the exact residual at (qa, qb): "
+            "the tangent of a nonlinear joint away from q = 0 (DESIGN 2.5).",
             output_names=["Ga", "Gb"],
         ),
         Kernel(

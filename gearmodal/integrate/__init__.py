@@ -129,10 +129,17 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         raise ModelError("dt", f"= {dt!r}: {n_steps} steps to {t_end} s is more than 5e7")
     if not isinstance(refreeze_deg, (int, float)) or not refreeze_deg > 0:
         raise ModelError("refreeze_deg", f"= {refreeze_deg!r}: must be a number > 0 deg")
+    from ..coupling import Coupled
+
+    casm = None  # the full assembly of a coupled system, solved in q = N z
     if isinstance(model, Assembly):
         asm, name, segments = model, "", [(0, n_steps, model.azimuth)]
-    elif isinstance(model, Model):
+        if getattr(model, "N", None) is not None:
+            casm, asm = model, model.reduced()
+    elif isinstance(model, (Model, Coupled)):
         asm, name = model.assemble(), model.name
+        if isinstance(model, Coupled):
+            casm, asm = asm, asm.reduced()
         om = float(speed_rpm) * 2 * math.pi / 60
         if om > 0 and rotating_geometry(model):
             per = max(1, int(math.floor(math.radians(refreeze_deg) / om / dt)))
@@ -141,7 +148,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         else:
             segments = [(0, n_steps, 0.0)]
     else:
-        raise TypeError(f"expected a gm.Model, got {type(model).__name__}")
+        raise TypeError(f"expected a gm.Model or gm.Coupled, got {type(model).__name__}")
     t = np.arange(n_steps + 1) * dt
     runner: Callable = METHODS[method]
     x = None
@@ -152,10 +159,18 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     seg_systems = []
     for k0, k1, azimuth in segments:
         seg_asm = asm if len(segments) == 1 else model.assemble(azimuth=azimuth)
+        if casm is not None and len(segments) > 1:
+            seg_casm, seg_asm = seg_asm, seg_asm.reduced()
+        else:
+            seg_casm = casm
         system = PiecewiseLinearSystem(seg_asm, speed_rpm)
         if system0 is None:
             system0 = system
-            x = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
+            if casm is None:
+                x = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
+            else:
+                x = np.concatenate([_initial_coupled(casm, q0, "q0"),
+                                    _initial_coupled(casm, v0, "v0")])
             s = system.penetration(x) > 0
             s_init = s.copy()
         else:
@@ -180,16 +195,63 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         for key, val in st.items():
             if isinstance(val, (int, float)):
                 stats_all[key] = stats_all.get(key, 0) + val
-        seg_systems.append((k0, k1, system))
+        seg_systems.append((k0, k1, system, seg_casm, U))
     X, S = np.concatenate(Xs), np.concatenate(Ss)
     stats = {**stats_all, "cpu_s": time.process_time() - cpu, "n_events": len(events),
              "n_steps": n_steps, "n_freezes": len(segments)}
-    return _result(seg_systems, t, X, S, events, s_init, stats,
+    result = _result([sg[:3] for sg in seg_systems], t, X, S, events, s_init, stats,
                    {"model": name, "method": method, "t_end": t_end, "dt": dt,
                     "speed_rpm": speed_rpm, "refreeze_deg": refreeze_deg, "options": options,
                     "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
                               for k, v in (loads or {}).items()},
                     "q0": q0 or {}, "v0": v0 or {}})
+    if casm is not None:
+        _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm)
+    return result
+
+
+def _initial_coupled(casm, values, label: str) -> np.ndarray:
+    """Independent coordinates ``z`` of initial values given in the original coordinates;
+    they must satisfy the (linearised) constraints."""
+    full = _initial(casm, values, label)
+    z = full[casm.independent]
+    miss = full - casm.expand(z)
+    scale = max(np.abs(full).max(), 1e-300)
+    if np.abs(miss).max() > 1e-9 * scale:
+        bad = casm.dof_names[int(np.argmax(np.abs(miss)))]
+        raise ModelError(label, f"violates the constraints at {bad!r}: give values that "
+                         "satisfy them, e.g. only for the independent coordinates "
+                         + ", ".join(casm.dof_names[i] for i in casm.independent[:8])
+                         + (" ..." if len(casm.independent) > 8 else ""))
+    return z
+
+
+def _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm) -> None:
+    """Coupled runs: states back to the original coordinates, constraint forces (the
+    multipliers, from the reduced accelerations) and the exact constraint residual."""
+    n = seg_systems[0][2].n
+    om = float(speed_rpm) * 2 * math.pi / 60
+    idx = result.q.index
+    Q = casm.expand(X[:, :n])
+    V = casm.expand(X[:, n:])
+    LAM = np.empty((len(X), casm.Gc.shape[0]))
+    for k0, k1, _system, seg_casm, U in seg_systems:
+        red = seg_casm.reduced()
+        Z, Zd, Ss = X[k0:k1 + 1, :n], X[k0:k1 + 1, n:], S[k0:k1 + 1]
+        c = red.contacts
+        Fc = np.where(Ss, c.stiffness * (Z @ c.W.T - c.offset) + c.damping * (Zd @ c.W.T), 0.0)
+        rhs = (U @ red.B.T + om**2 * red.f_cent - Zd @ (red.C + om * red.G).T
+               - Z @ (red.K + om**2 * red.K_cent).T - Fc @ c.W)
+        Zdd = np.linalg.solve(red.M, rhs.T).T
+        LAM[k0:k1 + 1] = seg_casm.multipliers(Q[k0:k1 + 1], V[k0:k1 + 1],
+                                              seg_casm.expand(Zdd), U, Ss, om)
+    result.q = pd.DataFrame(Q, index=idx, columns=casm.dof_names)
+    result.v = pd.DataFrame(V, index=idx, columns=casm.dof_names)
+    result.constraint_forces = pd.DataFrame(LAM, index=idx, columns=casm.constraint_names)
+    if hasattr(model, "constraint_residual"):
+        result.constraint_residual = model.constraint_residual(result.q)
+        result.stats["max_constraint_residual"] = float(
+            np.abs(result.constraint_residual.to_numpy()).max(initial=0.0))
 
 
 def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResult:

@@ -41,6 +41,12 @@ class SimulationResult:
         switch), ``force_after`` (N, the contact force just after the switch).
     contact_state : DataFrame of booleans (closed) per contact at the output times.
     settings : the settings that made the run (method, dt, options).
+    constraint_forces : coupled systems (:class:`gearmodal.Coupled`) only: the Lagrange
+        multipliers, one column per constraint row (N or N m), i.e. the forces the constraints
+        transmit (for a joint: the force on body ``b`` in joint axes).
+    constraint_residual : coupled systems only: the exact residual ``g`` of every constraint
+        row along the trajectory (m or rad; rounding for linear constraints, second order for
+        linearised joints).
     """
 
     t: np.ndarray
@@ -52,6 +58,8 @@ class SimulationResult:
     settings: dict = field(default_factory=dict)
     initial_state: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
+    constraint_forces: pd.DataFrame | None = None
+    constraint_residual: pd.DataFrame | None = None
 
     # -- contact intervals ---------------------------------------------------------------
     def _intervals(self) -> dict[str, list[tuple[float, float]]]:
@@ -185,13 +193,18 @@ class SimulationResult:
         return fig
 
     def save(self, directory) -> Path:
-        """Write ``q.csv``, ``v.csv``, ``forces.csv``, ``events.csv`` and ``settings.json``."""
+        """Write ``q.csv``, ``v.csv``, ``forces.csv``, ``events.csv``, ``settings.json`` and,
+        for coupled systems, ``constraint_forces.csv`` and ``constraint_residual.csv``."""
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
         self.q.to_csv(d / "q.csv", index_label="time")
         self.v.to_csv(d / "v.csv", index_label="time")
         self.forces.to_csv(d / "forces.csv", index_label="time")
         self.events.to_csv(d / "events.csv", index=False)
+        if self.constraint_forces is not None:
+            self.constraint_forces.to_csv(d / "constraint_forces.csv", index_label="time")
+        if self.constraint_residual is not None:
+            self.constraint_residual.to_csv(d / "constraint_residual.csv", index_label="time")
         (d / "settings.json").write_text(json.dumps(
             {**self.settings, "stats": self.stats}, indent=2, default=str))
         return d

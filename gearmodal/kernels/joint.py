@@ -7,7 +7,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ['joint_residual', 'joint_gradients', 'bearing_gaps', 'bearing_gap_jacobians']
+__all__ = ['joint_residual', 'joint_gradients', 'joint_gradients_at', 'bearing_gaps', 'bearing_gap_jacobians']
 
 
 @numba.njit(cache=True)
@@ -129,6 +129,123 @@ def joint_gradients(pax, pay, paz, pbx, pby, pbz, gamma):
     Gb[3, 4] = x4
     Gb[4, 3] = x1
     Gb[4, 4] = x5
+    Gb[5, 5] = -1
+    return Ga, Gb
+
+
+@numba.njit(cache=True)
+def joint_gradients_at(qa, qb, pax, pay, paz, pbx, pby, pbz, gamma):
+    """Constraint gradients (Ga, Gb), each (6, 6), of the exact residual at (qa, qb): the tangent of a nonlinear joint away from q = 0 (DESIGN 2.5).
+
+    Arguments:
+        qa: displacements of a (ux, uy, uz, rx, ry, rz), global axes
+        qb: displacements of b (ux, uy, uz, rx, ry, rz), global axes
+        pax: x of the offset from a's centre to the joint point (global axes)
+        pay: y of the offset from a's centre
+        paz: z of the offset from a's centre
+        pbx: x of the offset from b's centre to the joint point
+        pby: y of the offset from b's centre
+        pbz: z of the offset from b's centre
+        gamma: joint axes angle: e1 = Rz(gamma) x_hat, e2 = Rz(gamma) y_hat, e3 = z_hat
+    """
+    uax = qa[0]
+    uay = qa[1]
+    uaz = qa[2]
+    rax = qa[3]
+    ray = qa[4]
+    raz = qa[5]
+    ubx = qb[0]
+    uby = qb[1]
+    ubz = qb[2]
+    rbx = qb[3]
+    rby = qb[4]
+    rbz = qb[5]
+    x0 = math.cos(gamma)
+    x1 = math.sin(gamma)
+    x2 = math.cos(rax)
+    x3 = math.cos(ray)
+    x4 = paz*x3
+    x5 = math.sin(rax)
+    x6 = math.sin(raz)
+    x7 = x5*x6
+    x8 = math.sin(ray)
+    x9 = math.cos(raz)
+    x10 = x2*x8*x9 - x7
+    x11 = x5*x9
+    x12 = x2*x6
+    x13 = x11 + x12*x8
+    x14 = pax*x10 - pay*x13 - x2*x4
+    x15 = -pax*x8*x9 + pay*x6*x8 + x4
+    x16 = paz*x8
+    x17 = pax*x3
+    x18 = pay*x3
+    x19 = x11*x17 + x16*x5 - x18*x7
+    x20 = -x17*x6 - x18*x9
+    x21 = x2*x9 - x7*x8
+    x22 = x11*x8 + x12
+    x23 = pax*x21 - pay*x22
+    x24 = -x1
+    x25 = -x0
+    x26 = math.cos(rbx)
+    x27 = math.cos(rby)
+    x28 = math.sin(rbx)
+    x29 = math.sin(rbz)
+    x30 = x28*x29
+    x31 = math.sin(rby)
+    x32 = math.cos(rbz)
+    x33 = x26*x31*x32 - x30
+    x34 = x28*x32
+    x35 = x26*x29
+    x36 = x31*x35 + x34
+    x37 = -pbx*x33 + pby*x36 + pbz*x26*x27
+    x38 = pbx*x31*x32 - pby*x29*x31 - pbz*x27
+    x39 = pbz*x31
+    x40 = pbx*x27
+    x41 = pby*x27*x28*x29 - x28*x39 - x34*x40
+    x42 = pby*x27
+    x43 = x29*x40 + x32*x42
+    x44 = x26*x32 - x30*x31
+    x45 = x31*x34 + x35
+    x46 = -pbx*x44 + pby*x45
+    Ga = np.zeros((6, 6))
+    Ga[0, 0] = x0
+    Ga[0, 1] = x1
+    Ga[0, 3] = x1*x14
+    Ga[0, 4] = x0*x15 + x1*x19
+    Ga[0, 5] = x0*x20 + x1*x23
+    Ga[1, 0] = x24
+    Ga[1, 1] = x0
+    Ga[1, 3] = x0*x14
+    Ga[1, 4] = x0*x19 - x1*x15
+    Ga[1, 5] = x0*x23 - x1*x20
+    Ga[2, 2] = 1
+    Ga[2, 3] = pax*x22 + pay*x21 - x4*x5
+    Ga[2, 4] = pay*x2*x3*x6 - x16*x2 - x17*x2*x9
+    Ga[2, 5] = pax*x13 + pay*x10
+    Ga[3, 3] = x0
+    Ga[3, 4] = x1
+    Ga[4, 3] = x24
+    Ga[4, 4] = x0
+    Ga[5, 5] = 1
+    Gb = np.zeros((6, 6))
+    Gb[0, 0] = x25
+    Gb[0, 1] = x24
+    Gb[0, 3] = x1*x37
+    Gb[0, 4] = x0*x38 + x1*x41
+    Gb[0, 5] = x0*x43 + x1*x46
+    Gb[1, 0] = x1
+    Gb[1, 1] = x25
+    Gb[1, 3] = x0*x37
+    Gb[1, 4] = x0*x41 - x1*x38
+    Gb[1, 5] = x0*x46 - x1*x43
+    Gb[2, 2] = -1
+    Gb[2, 3] = -pbx*x45 - pby*x44 + pbz*x27*x28
+    Gb[2, 4] = x26*x32*x40 + x26*x39 - x35*x42
+    Gb[2, 5] = -pbx*x36 - pby*x33
+    Gb[3, 3] = x25
+    Gb[3, 4] = x24
+    Gb[4, 3] = x1
+    Gb[4, 4] = x25
     Gb[5, 5] = -1
     return Ga, Gb
 
