@@ -4,7 +4,7 @@ Floating-frame gear models (torsional, planar or full DOF per component), assemb
 piecewise-linear contact model, modal and Campbell analysis. SI units throughout.
 """
 
-from . import io  # noqa: F401  (gm.io.read_loads, ...)
+from . import io, turbine  # noqa: F401  (gm.io.read_loads, gm.turbine.Wind, ...)
 from .assembly import Assembly, assemble
 from .campbell import CampbellResult, campbell
 from .coupling import (

@@ -1,0 +1,185 @@
+"""Quasi-steady blade-element momentum (BEM) aerodynamics of a rigid rotor (DESIGN 2.5).
+
+Per blade element (radius ``r``, chord ``c``, twist ``beta``), with the local wind ``U`` normal
+to the rotor and ``v_t`` in the plane along the blade's direction of motion:
+
+    W^2 = (U (1 - a))^2 + (Omega r (1 + a') - v_t)^2
+    phi = atan2(U (1 - a), Omega r (1 + a') - v_t)
+    alpha = phi - beta - pitch,   Cn = cl cos(phi) + cd sin(phi),   Ct = cl sin(phi) - cd cos(phi)
+    a = 1 / (4 F sin^2(phi) / (sigma Cn) + 1),   a' = 1 / (4 F sin(phi) cos(phi) / (sigma Ct) - 1)
+
+with solidity ``sigma = B c / (2 pi r)`` and Prandtl's tip and hub loss ``F``; above ``a_c = 0.2``
+the axial induction follows Glauert's correction in Spera's form (M. O. L. Hansen, "Aerodynamics
+of Wind Turbines", 2nd ed., Earthscan 2008, ch. 6, eqs. 6.35-6.38 and 6.40). Quasi-steady: the
+inductions are solved to convergence at every aerodynamic update, starting from the previous
+update's values. Forces per unit length ``0.5 rho W^2 c (Cn, Ct)``.
+
+Hub loads (nonrotating axes of :mod:`.wind`, at the rotor centre): thrust ``Fx``, driving torque
+``Q`` (about the shaft, positive in the direction of rotation), in-plane shear ``Fy``, ``Fz``
+(the rotor's weight included), tilt ``My`` and yaw ``Mz`` moments. Blade ``b`` is at azimuth
+``psi + 2 pi b / B`` (0 = up); its element at radius ``r`` sits at ``y = -r sin(psi_b)``,
+``z = r cos(psi_b)`` and moves along ``e_t = (0, -cos(psi_b), -sin(psi_b))``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+
+from ..errors import ModelError
+from .airfoil import Airfoil
+
+LOAD_COLUMNS = ["thrust_N", "torque_Nm", "shear_y_N", "shear_z_N", "tilt_Nm", "yaw_Nm"]
+
+
+@dataclass
+class Rotor:
+    """A rigid three-bladed (or ``blades``-bladed) rotor.
+
+    radius, hub_radius : m. r, chord : m at the element centres. twist : rad (local pitch of
+    the chord to the rotor plane). pitch : rad (fixed: stall regulation). airfoil : polar.
+    mass : kg (its weight acts on the hub). rho : air density, kg/m^3.
+    """
+
+    radius: float
+    hub_radius: float
+    r: np.ndarray
+    chord: np.ndarray
+    twist: np.ndarray
+    blades: int = 3
+    pitch: float = 0.0
+    airfoil: Airfoil = field(default_factory=Airfoil.viterna)
+    mass: float = 0.0
+    rho: float = 1.225
+    gravity: float = 9.81
+    tol: float = 1e-8
+    max_iter: int = 200
+
+    def __post_init__(self):
+        self.r = np.asarray(self.r, dtype=float)
+        self.chord = np.asarray(self.chord, dtype=float)
+        self.twist = np.asarray(self.twist, dtype=float)
+        n = len(self.r)
+        if n < 2 or self.chord.shape != (n,) or self.twist.shape != (n,):
+            raise ModelError("rotor.r", "r, chord and twist need the same length >= 2")
+        if not (0 <= self.hub_radius < self.r.min() and self.r.max() < self.radius):
+            raise ModelError("rotor.r", f"element radii must lie in ({self.hub_radius}, "
+                             f"{self.radius}) m")
+        if np.any(np.diff(self.r) <= 0) or np.any(self.chord <= 0):
+            raise ModelError("rotor.r", "radii must increase and chords be > 0")
+        edges = np.concatenate([[self.hub_radius], 0.5 * (self.r[1:] + self.r[:-1]),
+                                [self.radius]])
+        self.dr = np.diff(edges)
+        self._a = np.zeros((self.blades, n))
+        self._ap = np.zeros((self.blades, n))
+
+    def positions(self, psi: float):
+        """Element positions ``(y, z)`` relative to the hub, each (blades, n), and the
+        blade azimuths."""
+        psib = psi + 2 * math.pi * np.arange(self.blades) / self.blades
+        y = -np.sin(psib)[:, None] * self.r[None, :]
+        z = np.cos(psib)[:, None] * self.r[None, :]
+        return y, z, psib
+
+    def loads(self, omega: float, psi: float, wind_u: np.ndarray, wind_vt: np.ndarray,
+              reset: bool = False) -> dict:
+        """Hub loads (``LOAD_COLUMNS``, SI) at rotor speed ``omega`` (rad/s) and azimuth
+        ``psi`` (rad) for the wind normal to the rotor ``wind_u`` and in plane along the
+        blade motion ``wind_vt`` (m/s, each (blades, n))."""
+        a = np.zeros_like(wind_u) if reset else self._a
+        ap = np.zeros_like(wind_u) if reset else self._ap
+        fn, ft, a, ap = _bem(np.ascontiguousarray(wind_u, dtype=float),
+                             np.ascontiguousarray(wind_vt, dtype=float), float(omega), self.r,
+                             self.chord, self.twist + self.pitch, self.dr, self.blades,
+                             self.radius, self.hub_radius, self.airfoil.alpha,
+                             self.airfoil.cl, self.airfoil.cd, a.copy(), ap.copy(), self.rho,
+                             self.tol, self.max_iter)
+        self._a, self._ap = a, ap
+        r = self.r[None, :]
+        y, z, psib = self.positions(psi)
+        et_y = -np.cos(psib)[:, None]
+        et_z = -np.sin(psib)[:, None]
+        return {
+            "thrust_N": float(fn.sum()),
+            "torque_Nm": float((ft * r).sum()),
+            "shear_y_N": float((ft * et_y).sum()),
+            "shear_z_N": float((ft * et_z).sum()) - self.mass * self.gravity,
+            "tilt_Nm": float((z * fn).sum()),
+            "yaw_Nm": float((-y * fn).sum()),
+        }
+
+    def power_coefficient(self, wind_speed: float, omega: float) -> tuple[float, float]:
+        """``(Cp, Ct)`` in uniform wind (no shear, turbulence or tower)."""
+        u = np.full((self.blades, len(self.r)), float(wind_speed))
+        ld = self.loads(omega, 0.0, u, np.zeros_like(u), reset=True)
+        area = math.pi * self.radius**2
+        p_wind = 0.5 * self.rho * area * wind_speed**3
+        return (ld["torque_Nm"] * omega / p_wind,
+                ld["thrust_N"] / (0.5 * self.rho * area * wind_speed**2))
+
+
+@numba.njit(cache=True)
+def _bem(U, vt, omega, r, chord, theta, dr, B, R, rh, pa, pcl, pcd, a, ap, rho, tol,
+         max_iter):
+    """Element-by-element BEM solution (module docstring); returns per element the normal and
+    tangential forces (N, over the element's width) and the inductions."""
+    nb, n = U.shape
+    fn = np.empty((nb, n))
+    ft = np.empty((nb, n))
+    ac = 0.2
+    for b in range(nb):
+        for i in range(n):
+            ri = r[i]
+            sigma = B * chord[i] / (2.0 * math.pi * ri)
+            u = max(U[b, i], 1e-3)
+            ai, api = a[b, i], ap[b, i]
+            for _ in range(max_iter):
+                ux = u * (1.0 - ai)
+                ut = omega * ri * (1.0 + api) - vt[b, i]
+                phi = math.atan2(ux, ut)
+                al = (phi - theta[i] + math.pi) % (2.0 * math.pi) - math.pi
+                cl = np.interp(al, pa, pcl)
+                cd = np.interp(al, pa, pcd)
+                sp, cp = math.sin(phi), math.cos(phi)
+                cn = cl * cp + cd * sp
+                ct = cl * sp - cd * cp
+                s = max(abs(sp), 1e-6)
+                f_tip = B * (R - ri) / (2.0 * ri * s)
+                f_hub = B * (ri - rh) / (2.0 * max(rh, 1e-3) * s)
+                F = (4.0 / math.pi**2) * math.acos(math.exp(-f_tip)) \
+                    * math.acos(math.exp(-f_hub))
+                F = max(F, 1e-4)
+                scn = sigma * cn
+                K = 4.0 * F * sp * sp / (scn if abs(scn) > 1e-12 else 1e-12)
+                an = 1.0 / (K + 1.0)
+                if an > ac:  # Glauert correction, Spera's form (Hansen eq. 6.38)
+                    d = (K * (1.0 - 2.0 * ac) + 2.0) ** 2 + 4.0 * (K * ac * ac - 1.0)
+                    an = 0.5 * (2.0 + K * (1.0 - 2.0 * ac) - math.sqrt(max(d, 0.0)))
+                sct = sigma * ct
+                den = 4.0 * F * sp * cp / (sct if abs(sct) > 1e-12 else 1e-12)
+                apn = 1.0 / (den - 1.0) if abs(den - 1.0) > 1e-12 else 0.5
+                if not math.isfinite(an):
+                    an = 0.0
+                if not math.isfinite(apn):
+                    apn = 0.0
+                an = min(max(an, -0.5), 0.95)
+                apn = min(max(apn, -0.5), 0.5)
+                change = max(abs(an - ai), abs(apn - api))
+                ai += 0.5 * (an - ai)
+                api += 0.5 * (apn - api)
+                if change < tol:
+                    break
+            a[b, i], ap[b, i] = ai, api
+            ux = u * (1.0 - ai)
+            ut = omega * ri * (1.0 + api) - vt[b, i]
+            phi = math.atan2(ux, ut)
+            al = (phi - theta[i] + math.pi) % (2.0 * math.pi) - math.pi
+            cl = np.interp(al, pa, pcl)
+            cd = np.interp(al, pa, pcd)
+            q = 0.5 * rho * (ux * ux + ut * ut) * chord[i] * dr[i]
+            fn[b, i] = q * (cl * math.cos(phi) + cd * math.sin(phi))
+            ft[b, i] = q * (cl * math.sin(phi) - cd * math.cos(phi))
+    return fn, ft, a, ap

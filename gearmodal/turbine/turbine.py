@@ -1,0 +1,231 @@
+"""The turbine: rotor, drivetrain inertia, generator, main-shaft bearings; start-up and operation
+in wind (DESIGN 2.5; paper section 5).
+
+The rotor turns as a rigid body at the aerodynamic rate ``dt``::
+
+    J omega' = Q_aero(omega, psi, wind) - ratio T_gen(ratio omega)        (rigid drivetrain)
+
+with ``J`` the drivetrain inertia reduced to the rotor (rotor + gearbox + generator ratio^2).
+Explicit midpoint steps; the generator's slip stiffness limits ``dt`` to well below ``J /
+(ratio^2 dT/domega)`` (about 0.1 s for the 600 kW machine): a clear error names ``dt`` when it
+is too long. The generator cuts in when its speed first reaches synchronous speed.
+
+Shaft-end loads on the gearbox: the main shaft is a rigid beam on the front main bearing (at
+``front_bearing`` m downwind of the hub centre) and the gearbox as rear bearing (at
+``rear_bearing``). The hub's transverse force ``F`` and moment ``M`` give the rear reaction by
+statics of the two-support beam (moments about the front bearing)::
+
+    R_rear_z = (M_y + x_f F_z) / (x_r - x_f),     R_rear_y = (-M_z + x_f F_y) / (x_r - x_f)
+
+and the gearbox carries ``-R_rear`` (``rear_force_y_N``, ``rear_force_z_N``): an overhung rotor's
+weight lifts the gearbox end of the shaft.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..errors import ModelError
+from .airfoil import Airfoil
+from .generator import InductionGenerator
+from .rotor import LOAD_COLUMNS, Rotor
+from .wind import Wind
+
+RPM = math.pi / 30
+
+
+@dataclass
+class Turbine:
+    """A stall-regulated turbine. rotor : :class:`Rotor`. generator :
+    :class:`InductionGenerator`. gear_ratio : generator / rotor speed. inertia : drivetrain
+    inertia at the rotor, kg m^2. hub_height, front_bearing, rear_bearing : m.
+    mounting_azimuth_deg : azimuth of planet 1 relative to blade 1 (deg)."""
+
+    rotor: Rotor
+    generator: InductionGenerator
+    gear_ratio: float
+    inertia: float
+    hub_height: float = 40.0
+    front_bearing: float = 1.0
+    rear_bearing: float = 2.6
+    mounting_azimuth_deg: float = 0.0
+    name: str = "turbine"
+
+    def __post_init__(self):
+        if not self.rear_bearing > self.front_bearing > 0:
+            raise ModelError("turbine.rear_bearing", f"= {self.rear_bearing!r}: need "
+                             f"rear_bearing > front_bearing > 0 m")
+        if not self.inertia > 0 or not self.gear_ratio > 0:
+            raise ModelError("turbine.inertia", "inertia and gear_ratio must be > 0")
+
+    def rear_force(self, ld: dict) -> tuple[float, float]:
+        """``(y, z)`` force of the shaft end on the gearbox, N (module docstring)."""
+        xf, xr = self.front_bearing, self.rear_bearing
+        rz = (ld["tilt_Nm"] + xf * ld["shear_z_N"]) / (xr - xf)
+        ry = (-ld["yaw_Nm"] + xf * ld["shear_y_N"]) / (xr - xf)
+        return -ry, -rz
+
+
+def load_turbine(path) -> Turbine:
+    """A :class:`Turbine` from a TOML file (``studies/models/600kw_turbine.toml``)."""
+    p = Path(path)
+    try:
+        d = tomllib.loads(p.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as err:
+        raise ModelError("path", f"= {str(path)!r}: {err}") from err
+    try:
+        t, ro, bl, af, ge = (d["turbine"], d["rotor"], d["blade"], d.get("airfoil", {}),
+                             d["generator"])
+    except KeyError as err:
+        raise ModelError(str(err).strip("'"), "section missing in " + str(path)) from None
+    r = np.asarray(bl["r"], dtype=float)
+    rotor = Rotor(radius=ro["radius"], hub_radius=ro["hub_radius"], r=r,
+                  chord=np.asarray(bl["chord"], dtype=float),
+                  twist=np.radians(np.asarray(bl["twist_deg"], dtype=float)),
+                  blades=int(ro.get("blades", 3)), pitch=math.radians(ro.get("pitch_deg", 0.0)),
+                  airfoil=Airfoil.viterna(**af), mass=ro["mass"],
+                  rho=ro.get("air_density", 1.225))
+    return Turbine(rotor=rotor, generator=InductionGenerator(**ge),
+                   gear_ratio=t["gear_ratio"], inertia=t["inertia"],
+                   hub_height=t["hub_height"], front_bearing=t["front_bearing"],
+                   rear_bearing=t["rear_bearing"],
+                   mounting_azimuth_deg=t.get("mounting_azimuth_deg", 0.0),
+                   name=t.get("name", p.stem))
+
+
+@dataclass
+class TurbineResult:
+    """Time series of a turbine run: ``loads`` DataFrame indexed by time (s) with
+    ``rotor_speed_rpm``, ``azimuth_deg`` (blade 1), ``generator_connected``,
+    ``generator_torque_Nm`` (on the generator shaft), ``power_W``, the hub loads
+    ``thrust_N, torque_Nm, shear_y_N, shear_z_N, tilt_Nm, yaw_Nm`` and the shaft-end force on
+    the gearbox ``rear_force_y_N, rear_force_z_N``."""
+
+    loads: pd.DataFrame
+    cut_in_time: float | None
+    settings: dict = field(default_factory=dict)
+
+    def to_frame(self) -> pd.DataFrame:
+        return self.loads
+
+    def plot(self, ax=None):
+        import matplotlib.pyplot as plt
+
+        fig, axs = plt.subplots(3, 1, sharex=True, figsize=(8, 7))
+        d = self.loads
+        axs[0].plot(d.index, d["rotor_speed_rpm"])
+        axs[0].set_ylabel("rotor speed [rpm]")
+        axs[1].plot(d.index, d["power_W"] / 1e3, label="electrical")
+        axs[1].plot(d.index, d["torque_Nm"] * d["rotor_speed_rpm"] * RPM / 1e3, lw=0.7,
+                    label="aerodynamic")
+        axs[1].set_ylabel("power [kW]")
+        axs[1].legend(fontsize=8)
+        axs[2].plot(d.index, d["rear_force_y_N"] / 1e3, label="y")
+        axs[2].plot(d.index, d["rear_force_z_N"] / 1e3, label="z")
+        axs[2].set_ylabel("shaft-end force on gearbox [kN]")
+        axs[2].legend(fontsize=8)
+        axs[2].set_xlabel("time [s]")
+        if self.cut_in_time is not None:
+            for a in axs:
+                a.axvline(self.cut_in_time, color="0.6", ls="--", lw=0.8)
+        fig.tight_layout()
+        return fig
+
+    def save(self, directory) -> Path:
+        d = Path(directory)
+        d.mkdir(parents=True, exist_ok=True)
+        self.loads.to_csv(d / "turbine_loads.csv", index_label="time")
+        (d / "turbine.json").write_text(json.dumps(
+            {**self.settings, "cut_in_time": self.cut_in_time}, indent=2, default=str))
+        return d
+
+    def gearbox_loads(self, ratio: float | None = None) -> dict:
+        """Loads for :func:`gearmodal.simulate` on the drivetrain model (``600kw.toml``):
+        ``rotor.torque`` (aerodynamic), ``generator.torque`` (the generator's braking torque,
+        negative) and the shaft-end force on the first stage's carrier in the gearbox plane
+        (``x`` = shaft ``y``, ``y`` = shaft ``z``, global axes)."""
+        d = self.loads
+        idx = pd.Index(d.index.to_numpy(dtype=float), name="time")
+        return {"rotor.torque": pd.Series(d["torque_Nm"].to_numpy(), index=idx),
+                "generator.torque": pd.Series(-d["generator_torque_Nm"].to_numpy(), index=idx),
+                "stage1.carrier.force_x": pd.Series(d["rear_force_y_N"].to_numpy(), index=idx),
+                "stage1.carrier.force_y": pd.Series(d["rear_force_z_N"].to_numpy(), index=idx)}
+
+
+def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 0.02,
+                     rotor_speed0_rpm: float = 6.0, azimuth0_deg: float = 0.0,
+                     connected: bool = False, progress=None) -> TurbineResult:
+    """Run the turbine from ``rotor_speed0_rpm`` for ``t_end`` s at the aerodynamic rate ``dt``.
+
+    The generator is disconnected until its speed first reaches synchronous speed (set
+    ``connected=True`` to start on the grid). ``progress(i, n)`` is called per step (the
+    solver never prints)."""
+    for label, val, lo in (("t_end", t_end, 0.0), ("dt", dt, 0.0)):
+        if not (isinstance(val, (int, float)) and math.isfinite(val) and val > lo):
+            raise ModelError(label, f"= {val!r}: must be a finite number > 0 s")
+    gen = turbine.generator
+    ratio = turbine.gear_ratio
+    # generator slip stiffness at the rotor: ratio^2 dT/domega at synchronous speed
+    c_gen = ratio**2 * 2 * gen.pullout_torque / (gen.pullout_slip * gen.omega_sync)
+    if dt > turbine.inertia / c_gen:
+        raise ModelError("dt", f"= {dt!r}: longer than the generator's slip time constant "
+                         f"{turbine.inertia / c_gen:.3g} s; the explicit step would be unstable")
+    if wind.turbulence_intensity > 0 and wind.duration < t_end:
+        raise ModelError("wind.duration", f"= {wind.duration}: shorter than t_end = {t_end}")
+    rot = turbine.rotor
+    n = int(math.ceil(t_end / dt - 1e-9))
+    omega = rotor_speed0_rpm * RPM
+    psi = math.radians(azimuth0_deg)
+    on = bool(connected)
+    cut_in = 0.0 if on else None
+    rows = []
+
+    def aero(t, om, ps, reset=False):
+        y, z, psib = rot.positions(ps)
+        vel = wind.velocity(t, y, z + turbine.hub_height)
+        vt = -vel[1] * np.cos(psib)[:, None] - vel[2] * np.sin(psib)[:, None]
+        return rot.loads(om, ps, vel[0], vt, reset=reset)
+
+    def gen_torque(om):
+        return gen.torque(om * ratio) if on else 0.0
+
+    for k in range(n + 1):
+        t = k * dt
+        ld = aero(t, omega, psi, reset=(k == 0))
+        tg = gen_torque(omega)
+        fy, fz = turbine.rear_force(ld)
+        rows.append((t, omega / RPM, math.degrees(psi) % 360.0, on, tg, tg * omega * ratio,
+                     *(ld[c] for c in LOAD_COLUMNS), fy, fz))
+        if k == n:
+            break
+        # explicit midpoint on (psi, omega)
+        acc = (ld["torque_Nm"] - ratio * tg) / turbine.inertia
+        om_m = omega + 0.5 * dt * acc
+        ps_m = psi + 0.5 * dt * omega
+        ld_m = aero(t + 0.5 * dt, om_m, ps_m)
+        acc_m = (ld_m["torque_Nm"] - ratio * gen_torque(om_m)) / turbine.inertia
+        psi += dt * om_m
+        omega += dt * acc_m
+        if not on and omega * ratio >= gen.omega_sync:
+            on = True
+            cut_in = t + dt
+        if not math.isfinite(omega):
+            raise ModelError("simulate_turbine", f"rotor speed not finite at t = {t:.3f} s")
+        if progress is not None:
+            progress(k + 1, n)
+    cols = ["time", "rotor_speed_rpm", "azimuth_deg", "generator_connected",
+            "generator_torque_Nm", "power_W", *LOAD_COLUMNS, "rear_force_y_N",
+            "rear_force_z_N"]
+    df = pd.DataFrame(rows, columns=cols).set_index("time")
+    return TurbineResult(loads=df, cut_in_time=cut_in,
+                         settings={"turbine": turbine.name, "t_end": t_end, "dt": dt,
+                                   "rotor_speed0_rpm": rotor_speed0_rpm,
+                                   "wind": {k: v for k, v in vars(wind).items()
+                                            if not k.startswith("_")}})
