@@ -241,9 +241,7 @@ class LinearConstraint(Constraint):
         Gb = np.zeros((1, self._nb))
         for key, c in self.coefficients.items():
             sysname, i = self._cols[key]
-            if sysname == self.a and self.a != self.b:
-                Ga[0, i] += c
-            elif sysname == self.a:  # both ends in one system: all on a
+            if sysname == self.a:  # both ends in one system: all on a
                 Ga[0, i] += c
             else:
                 Gb[0, i] += c
@@ -393,16 +391,19 @@ class CoupledAssembly(Assembly):
         return np.asarray(z) @ self.N.T
 
     def multipliers(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, u: np.ndarray,
-                    state: np.ndarray, speed: float = 0.0) -> np.ndarray:
+                    state: np.ndarray, speed: float = 0.0,
+                    contact_forces: np.ndarray | None = None) -> np.ndarray:
         """Constraint forces ``lambda`` (rows: times) from ``Gc^T lambda = -B`` (least squares,
         exact when the motion satisfies the coupled equations). ``q, v, a`` (times x n),
-        ``u`` (times x loads), ``state`` (times x contacts), speed in rad/s."""
+        ``u`` (times x loads), ``state`` (times x contacts), speed in rad/s;
+        ``contact_forces`` (times x contacts) when already known."""
         q, v, a = np.atleast_2d(q), np.atleast_2d(v), np.atleast_2d(a)
-        u, S = np.atleast_2d(u), np.atleast_2d(state)
+        u = np.atleast_2d(u)
         c = self.contacts
-        P = q @ c.W.T - c.offset
-        R = v @ c.W.T
-        Fc = np.where(S, c.stiffness * P + c.damping * R, 0.0)
+        Fc = contact_forces
+        if Fc is None:
+            Fc = np.where(np.atleast_2d(state), c.stiffness * (q @ c.W.T - c.offset)
+                          + c.damping * (v @ c.W.T), 0.0)
         Bres = (a @ self.M.T + v @ (self.C + speed * self.G).T
                 + q @ (self.K + speed**2 * self.K_cent).T + Fc @ c.W
                 - u @ self.B.T - speed**2 * self.f_cent)
@@ -508,7 +509,9 @@ class Coupled:
 
     @property
     def dof_names(self) -> list[str]:
-        return self.assemble().dof_names
+        """Coupled coordinate names (model systems first, as :meth:`offsets`)."""
+        plain = [s for s in self.systems.values() if not isinstance(s, ModelSystem)]
+        return self.merged.dof_names + [f"{s.name}.{d}" for s in plain for d in s.dof_names]
 
     def split(self, q: np.ndarray) -> dict[str, np.ndarray]:
         """Coordinates of each system from the coupled vector ``q``."""

@@ -191,28 +191,3 @@ def test_scipy_reference_does_not_flip_forever_at_a_tangent_contact():
     scale = np.abs(ex.q.to_numpy()).max()
     assert np.abs(sim.q.to_numpy() - ex.q.to_numpy()).max() < 1e-6 * scale
 
-
-def test_doubled_propagators_equal_the_direct_exponential():
-    """Coarse dyadic levels are derived from the finest by exact doubling (FOH composition);
-    they must equal Van Loan's exponential computed directly at each level. Tolerance: the
-    squaring amplifies rounding by ~2 per level, 4 levels here -> 1e-13 relative."""
-    from gearmodal.integrate.system import Propagators
-
-    lp = dict(mass={"carrier": 5.43, "ring": 2.35, "sun": 0.4, "planet": 0.66},
-              inertia_over_r2={"carrier": 6.29, "ring": 3.0, "sun": 0.39, "planet": 0.61},
-              bearing={"carrier": 1e8, "ring": 1e8, "sun": 1e8, "planet": 1e8},
-              torsional={"carrier": 1e6, "ring": 1e9, "sun": 1e6},
-              mesh={"sun_planet": 5e8, "ring_planet": 5e8})
-    m = gm.lin_parker_stage(3, **lp, pressure_angle=math.radians(24.6), backlash=2e-6,
-                            mesh_damping=500.0)
-    system = PiecewiseLinearSystem(gm.assemble(m), speed_rpm=600.0)
-    prop = Propagators(system, 4e-5)
-    s = np.zeros(system.n_contacts, dtype=bool)
-    s[::3] = True
-    J = prop.taylor_level(s)
-    assert J >= 3  # the state is stiff enough that several levels are doubled
-    doubled = prop.level(s, 0)
-    assert prop.n_exponentials == 1
-    direct = prop._exponential(prop.state(s)["A"], prop.dt)
-    for a, b in zip(doubled, direct, strict=True):
-        assert np.abs(a - b).max() <= 1e-13 * np.abs(b).max()

@@ -244,7 +244,8 @@ def _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm) -> None:
                - Z @ (red.K + om**2 * red.K_cent).T - Fc @ c.W)
         Zdd = np.linalg.solve(red.M, rhs.T).T
         LAM[k0:k1 + 1] = seg_casm.multipliers(Q[k0:k1 + 1], V[k0:k1 + 1],
-                                              seg_casm.expand(Zdd), U, Ss, om)
+                                              seg_casm.expand(Zdd), U, Ss, om,
+                                              contact_forces=Fc)
     result.q = pd.DataFrame(Q, index=idx, columns=casm.dof_names)
     result.v = pd.DataFrame(V, index=idx, columns=casm.dof_names)
     result.constraint_forces = pd.DataFrame(LAM, index=idx, columns=casm.constraint_names)

@@ -115,7 +115,8 @@ class TurbineResult:
     def to_frame(self) -> pd.DataFrame:
         return self.loads
 
-    def plot(self, ax=None):
+    def plot(self):
+        """Rotor speed, power and shaft-end force against time; returns the Figure."""
         import matplotlib.pyplot as plt
 
         fig, axs = plt.subplots(3, 1, sharex=True, figsize=(8, 7))
