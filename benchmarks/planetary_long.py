@@ -28,9 +28,9 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+from work_precision import planetary_clearance_model  # noqa: E402
 
 import gearmodal as gm  # noqa: E402
-from work_precision import planetary_clearance_model  # noqa: E402
 
 
 def main(argv=None):
