@@ -23,6 +23,7 @@ from ..errors import ModelError
 from ..model.model import Model
 from .exact import run_exact
 from .newmark import run_newmark
+from .refreeze import AzimuthAssembler
 from .result import EVENT_COLUMNS, SimulationResult
 from .scipy_ref import run_scipy
 from .system import PiecewiseLinearSystem
@@ -157,8 +158,11 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     cpu = time.process_time()
     system0 = None
     seg_systems = []
+    geometry = model
+    if len(segments) > 1 and isinstance(model, Model):
+        geometry = AzimuthAssembler(model)  # exact and ~20x cheaper than assembling anew
     for k0, k1, azimuth in segments:
-        seg_asm = asm if len(segments) == 1 else model.assemble(azimuth=azimuth)
+        seg_asm = asm if len(segments) == 1 else geometry.assemble(azimuth=azimuth)
         if casm is not None and len(segments) > 1:
             seg_casm, seg_asm = seg_asm, seg_asm.reduced()
         else:

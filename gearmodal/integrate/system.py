@@ -55,6 +55,7 @@ class PiecewiseLinearSystem:
         except np.linalg.LinAlgError:
             raise ModelError("mass", "the mass matrix is not positive definite") from None
         self.Minv = sla.cho_solve((L, True), np.eye(n))
+        self.Linv = sla.solve_triangular(L, np.eye(n), lower=True)  # M^-1 = Linv^T Linv
         self.K0 = asm.K + om**2 * asm.K_cent
         self.C0 = asm.C + om * asm.G
         self.f_const = om**2 * asm.f_cent
@@ -86,6 +87,22 @@ class PiecewiseLinearSystem:
         A[n:, :n] = -self.Minv @ K
         A[n:, n:] = -self.Minv @ C
         return A, f
+
+    def spectral_bound(self, s: np.ndarray) -> float:
+        """An upper bound of the spectral radius of ``A_s``, 1/s.
+
+        An eigenpair satisfies ``(lam^2 M + lam C_s + K_s) x = 0``; with ``y = L^T x``
+        (``M = L L^T``, ``|y| = 1``) and ``K^ = L^-1 K_s L^-T``, ``C^ = L^-1 C_s L^-T``:
+        ``|lam|^2 <= |lam| |C^| + |K^|``, so ``|lam| <= (c + sqrt(c^2 + 4 k)) / 2`` with the
+        spectral norms ``c``, ``k``. Tight for lightly damped systems (it is the highest
+        natural frequency when ``C = 0``) and ~4x cheaper than the eigenvalues of ``A_s``."""
+        if self.n == 0:
+            return 0.0
+        K, C, _ = self.matrices(s)
+        Li = self.Linv
+        k = np.linalg.norm(Li @ K @ Li.T, 2)
+        c = np.linalg.norm(Li @ C @ Li.T, 2)
+        return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
 
     def penetration(self, x: np.ndarray) -> np.ndarray:
         """Penetration ``W q - offset`` of every contact."""
@@ -126,7 +143,8 @@ def double_step(Phi: np.ndarray, G0: np.ndarray, G1: np.ndarray):
 
 
 class Propagators:
-    """Per contact state: ``A_s``, ``f_s``, spectral radius and dyadic step propagators."""
+    """Per contact state: ``A_s``, ``f_s``, a bound of the spectral radius
+    (:meth:`PiecewiseLinearSystem.spectral_bound`) and dyadic step propagators."""
 
     def __init__(self, system: PiecewiseLinearSystem, dt: float):
         self.system = system
@@ -139,8 +157,7 @@ class Propagators:
         d = self._states.get(key)
         if d is None:
             A, f = self.system.first_order(s)
-            rho = float(np.max(np.abs(np.linalg.eigvals(A)))) if len(A) else 0.0
-            rho = max(rho, 1e-300)
+            rho = max(self.system.spectral_bound(s), 1e-300)
             d = {"A": A, "f": f, "rho": rho, "levels": {}}
             self._states[key] = d
         return d

@@ -1,0 +1,99 @@
+"""Cheap refreezing of azimuth-dependent geometry (DESIGN 3.2, rotating geometry).
+
+A model whose frames turn against each other (a carrier against a fixed housing) assembles to
+matrices that depend on the input azimuth ``psi`` only through the frame rotations
+``Rz(r_f psi)``. With frame speed ratios 0 and 1 (the usual planetary carrier input) every
+assembled entry is a trigonometric polynomial in ``psi``: the gap and load rows are products of
+at most two rotations (a frame rotation and a line of action turning with a planet centre), so
+of degree 2, and the stiffness ``sum k w w^T`` is of degree 4. :class:`AzimuthAssembler`
+samples the assembly at ``2 D + 1`` equally spaced azimuths, takes their discrete Fourier
+coefficients (exact interpolation of a degree-``D`` trigonometric polynomial), checks the
+interpolant against a direct assembly at an azimuth off the sample grid, and then evaluates any
+azimuth for the cost of a few array sums instead of a full assembly. Models for which the check
+fails (other frame speed ratios) are assembled directly at every refreeze.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..assembly import Assembly
+
+#: trigonometric degree of the interpolant (module docstring)
+DEGREE = 4
+#: off-grid azimuth of the check (rad), and the check's tolerance relative to each array's size
+CHECK_AZIMUTH = 0.4142135623730951
+CHECK_RTOL = 1e-10
+
+_FIELDS = ("M", "C", "K", "G", "K_cent", "f_cent", "B")
+
+
+def _arrays(asm: Assembly) -> dict[str, np.ndarray]:
+    out = {f: getattr(asm, f) for f in _FIELDS}
+    out["contacts.W"] = asm.contacts.W
+    out["contacts.offset"] = asm.contacts.offset
+    if asm.springs is not None:
+        out["springs.W"] = asm.springs.W
+    return out
+
+
+class AzimuthAssembler:
+    """``assemble(azimuth)`` of ``model`` by exact trigonometric interpolation (module
+    docstring), falling back to direct assembly when the model's geometry is not such a
+    polynomial. ``exact`` tells which path is taken."""
+
+    def __init__(self, model, degree: int = DEGREE):
+        self.model = model
+        n_s = 2 * degree + 1
+        self.harmonics = np.arange(degree + 1)
+        psi = 2 * math.pi * np.arange(n_s) / n_s
+        samples = [model.assemble(azimuth=float(p)) for p in psi]
+        self.template = samples[0]
+        # real DFT: a_h = (2 / n_s) sum f(psi_j) cos(h psi_j), b_h likewise with sin; a_0 halved
+        cos = np.cos(np.outer(self.harmonics, psi)) * (2.0 / n_s)
+        sin = np.sin(np.outer(self.harmonics, psi)) * (2.0 / n_s)
+        cos[0] *= 0.5
+        self.coef: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        stacked = {key: np.stack([_arrays(s)[key] for s in samples]) for key in _arrays(samples[0])}
+        for key, arr in stacked.items():
+            flat = arr.reshape(n_s, -1)
+            shape = (len(self.harmonics),) + arr.shape[1:]
+            self.coef[key] = ((cos @ flat).reshape(shape), (sin @ flat).reshape(shape))
+        check = model.assemble(azimuth=CHECK_AZIMUTH)
+        got = self._values(CHECK_AZIMUTH)
+        self.exact = all(
+            np.allclose(got[k], v, rtol=0, atol=CHECK_RTOL * max(np.abs(v).max(initial=0), 1e-30))
+            for k, v in _arrays(check).items())
+
+    def _values(self, azimuth: float) -> dict[str, np.ndarray]:
+        c = np.cos(self.harmonics * azimuth)
+        s = np.sin(self.harmonics * azimuth)
+        return {k: np.tensordot(c, a, axes=1) + np.tensordot(s, b, axes=1)
+                for k, (a, b) in self.coef.items()}
+
+    def assemble(self, azimuth: float) -> Assembly:
+        """The :class:`~gearmodal.assembly.Assembly` at input azimuth ``azimuth`` (rad)."""
+        if not self.exact:
+            return self.model.assemble(azimuth=azimuth)
+        v = self._values(float(azimuth))
+        t = self.template
+        contacts = dataclasses.replace(t.contacts, W=v["contacts.W"],
+                                       offset=v["contacts.offset"])
+        springs = t.springs
+        if springs is not None:
+            springs = dataclasses.replace(springs, W=v["springs.W"])
+        return dataclasses.replace(t, **{f: v[f] for f in _FIELDS}, contacts=contacts,
+                                   springs=springs, azimuth=float(azimuth))
+
+    def load_map(self, azimuth: np.ndarray) -> np.ndarray:
+        """``B`` at many azimuths at once, (len(azimuth), n, n_loads)."""
+        az = np.atleast_1d(np.asarray(azimuth, dtype=float))
+        if not self.exact:
+            return np.stack([self.model.assemble(azimuth=float(a)).B for a in az])
+        a, b = self.coef["B"]
+        c = np.cos(np.outer(az, self.harmonics))
+        s = np.sin(np.outer(az, self.harmonics))
+        return np.tensordot(c, a, axes=1) + np.tensordot(s, b, axes=1)

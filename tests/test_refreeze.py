@@ -1,0 +1,56 @@
+"""Cheap refreezing: the trigonometric azimuth interpolant equals direct assembly, and the
+spectral bound used for the propagation levels bounds the true spectral radius."""
+
+import numpy as np
+import pytest
+
+import gearmodal as gm
+from gearmodal.integrate.refreeze import AzimuthAssembler
+from gearmodal.integrate.system import PiecewiseLinearSystem
+
+FIELDS = ("M", "C", "K", "G", "K_cent", "f_cent", "B")
+
+
+@pytest.fixture(scope="module")
+def drivetrain():
+    return gm.load("studies/models/600kw.toml")
+
+
+def _close(a, b):
+    for f in FIELDS:
+        x, y = getattr(a, f), getattr(b, f)
+        assert np.abs(x - y).max(initial=0) <= 1e-12 * max(np.abs(y).max(initial=0), 1.0), f
+    assert np.abs(a.contacts.W - b.contacts.W).max(initial=0) <= 1e-12
+    assert np.abs(a.springs.W - b.springs.W).max(initial=0) <= 1e-12
+
+
+def test_interpolant_equals_assembly(drivetrain):
+    geo = AzimuthAssembler(drivetrain)
+    assert geo.exact  # carrier (ratio 1) against ground (ratio 0): a degree-4 polynomial
+    for psi in (0.0, 0.3, 2.9, -5.1, 40.0):
+        _close(geo.assemble(psi), drivetrain.assemble(azimuth=psi))
+    B = geo.load_map(np.array([0.3, 2.9]))
+    assert np.allclose(B[1], drivetrain.assemble(azimuth=2.9).B, rtol=0, atol=1e-13)
+
+
+def test_too_low_degree_falls_back_to_assembly(drivetrain):
+    # the ring (carrier frame) on the housing (ground) makes the coupling rows cos/sin psi:
+    # a constant (degree-0) interpolant cannot hold them
+    geo = AzimuthAssembler(drivetrain, degree=0)
+    assert not geo.exact
+    _close(geo.assemble(0.7), drivetrain.assemble(azimuth=0.7))
+
+
+@pytest.mark.parametrize("speed", [0.0, 22.1, 2000.0])
+@pytest.mark.parametrize("damping", [0.0, 1e4, 1e7])
+def test_spectral_bound(drivetrain, speed, damping):
+    asm = drivetrain.assemble(azimuth=0.3)
+    asm.C = asm.C + damping * np.eye(asm.n)
+    sy = PiecewiseLinearSystem(asm, speed)
+    s = asm.contacts.nominal
+    A, _ = sy.first_order(s)
+    rho = np.abs(np.linalg.eigvals(A)).max()
+    bound = sy.spectral_bound(s)
+    assert bound >= rho * (1 - 1e-12)
+    if damping == 0.0 and speed < 100:
+        assert bound <= 1.01 * rho  # tight when lightly damped: the top natural frequency
