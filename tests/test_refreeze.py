@@ -53,4 +53,4 @@ def test_spectral_bound(drivetrain, speed, damping):
     bound = sy.spectral_bound(s)
     assert bound >= rho * (1 - 1e-12)
     if damping == 0.0 and speed < 100:
-        assert bound <= 1.01 * rho  # tight when lightly damped: the top natural frequency
+        assert bound <= 1.05 * rho  # tight when lightly damped (the model: ~5 % on meshes)
