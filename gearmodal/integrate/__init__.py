@@ -30,7 +30,7 @@ from .system import PiecewiseLinearSystem
 
 METHODS = {"exact": run_exact, "newmark": run_newmark, "scipy": run_scipy}
 
-__all__ = ["METHODS", "SimulationResult", "simulate"]
+__all__ = ["METHODS", "SimulationResult", "reconcile", "simulate"]
 
 
 def _load_grid(asm: Assembly, loads, t: np.ndarray) -> np.ndarray:
@@ -178,15 +178,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
             s = system.penetration(x) > 0
             s_init = s.copy()
         else:
-            # the refrozen geometry moves the gaps slightly: a contact whose state no longer
-            # matches its penetration switches at the segment start, and is logged
-            p, r = system.penetration(x), system.rate(x)
-            for e in np.flatnonzero((p > 0) != s):
-                s = s.copy()
-                s[e] = not s[e]
-                force = system.k[e] * max(p[e], 0.0) + system.c[e] * r[e] if s[e] else 0.0
-                events.append((k0 * dt, int(e), not s[e], bool(s[e]), float(r[e]),
-                               float(force)))
+            s = reconcile(system, x, s, k0 * dt, events)
         ts = t[k0:k1 + 1]
         U = _load_grid(seg_asm, loads, ts)
         F = U @ seg_asm.B.T + system.f_const[None, :]
@@ -212,6 +204,20 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     if casm is not None:
         _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm)
     return result
+
+
+def reconcile(system: PiecewiseLinearSystem, x: np.ndarray, s: np.ndarray, t: float,
+              events: list) -> np.ndarray:
+    """Contact state at a refreeze: the refrozen geometry moves the gaps slightly, so a contact
+    whose state no longer matches its penetration switches at time ``t`` and is logged in
+    ``events``. Returns the new state."""
+    p, r = system.penetration(x), system.rate(x)
+    s = s.copy()
+    for e in np.flatnonzero((p > 0) != s):
+        s[e] = not s[e]
+        force = system.k[e] * max(p[e], 0.0) + system.c[e] * r[e] if s[e] else 0.0
+        events.append((t, int(e), not s[e], bool(s[e]), float(r[e]), float(force)))
+    return s
 
 
 def _initial_coupled(casm, values, label: str) -> np.ndarray:

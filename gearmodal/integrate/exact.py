@@ -123,8 +123,15 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     between). Returns ``(X, S, events, stats)``: states (n_steps + 1, 2n), contact states
     (n_steps + 1, n_contacts), events as tuples (time, contact, before, after, rate, force).
     """
-    integ = ExactIntegrator(system, dt, max_events_per_step)
+    # the propagators belong to the frozen system: callers that advance one system in several
+    # calls (the turbine co-simulation) keep its exponentials
+    key = (float(dt), int(max_events_per_step))
+    cache = system.__dict__.setdefault("_exact_integrators", {})
+    integ = cache.get(key)
+    if integ is None:
+        integ = cache[key] = ExactIntegrator(system, dt, max_events_per_step)
     prop = integ.prop
+    n_exp0, n_states0 = prop.n_exponentials, len(prop._states)
     X = np.empty((n_steps + 1, 2 * system.n))
     S = np.empty((n_steps + 1, system.n_contacts), dtype=bool)
     X[0], S[0] = x0, s0
@@ -151,5 +158,6 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     if not np.all(np.isfinite(X)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(X), axis=1))[0])
         raise ModelError("simulate", f"the solution is not finite at t = {bad * dt:.9g} s")
-    stats = {"exponentials": prop.n_exponentials, "states": len(prop._states)}
+    stats = {"exponentials": prop.n_exponentials - n_exp0,
+             "states": len(prop._states) - n_states0}
     return X, S, events, stats

@@ -97,3 +97,74 @@ class AzimuthAssembler:
         c = np.cos(np.outer(az, self.harmonics))
         s = np.sin(np.outer(az, self.harmonics))
         return np.tensordot(c, a, axes=1) + np.tensordot(s, b, axes=1)
+
+
+class QuasiStaticTransport:
+    """Carry a state across a refreeze without an artificial jolt.
+
+    A frozen segment holds the geometry at its middle azimuth; the true geometry turns
+    continuously. A static deflection across frames turning against each other (a housing
+    sagging on its suspension under the rotor weight, seen from the rotating carrier) is
+    therefore held fixed in the rotating axes during a segment, and at the refreeze the
+    coupling rows turn by the segment's angle: the elastic forces would jump by about ``k |q|
+    dpsi`` (28 kN for the 600 kW carrier bearing at 1.45 deg) and ring the gearbox. Since the
+    geometry turns slowly against the elastic frequencies (0.4 Hz against 10 Hz and above),
+    the true response to it is quasi-static, so at a refreeze the state is shifted by the change
+    of the static solution from the old to the new frozen system, in the current contact state
+    ``s``::
+
+        q <- q + q_st(new) - q_st(old),   K_s q_st = F + f_s - M R (R^T M R)^-1 R^T (F + f_s)
+
+    with ``R`` the free (rigid-body) modes (d'Alembert: an accelerating drivetrain) and ``q_st``
+    M-orthogonal to them. Its cost is two linear solves per refreeze; its benefit is measured
+    in ``benchmarks/turbine_speed.py`` against a finely refrozen reference.
+    """
+
+    def __init__(self, free: np.ndarray, M: np.ndarray):
+        self.R = free
+        self.MR = M @ free
+        if free.shape[1]:
+            self.RtMR_inv = np.linalg.inv(free.T @ self.MR)
+            # basis of the complement of the free modes (Euclidean), for a regular solve
+            self.Q = np.linalg.qr(free, mode="complete")[0][:, free.shape[1]:]
+        else:
+            self.RtMR_inv = np.zeros((0, 0))
+            self.Q = np.eye(M.shape[0])
+
+    def _stiffness(self, system, s):
+        # without the centripetal softening: Lin & Parker's -m Omega^2 terms also soften the
+        # free rotation (the centrifugal preload that balances them is not modelled), which
+        # makes the static problem nearly singular along it at speed
+        K, _, f = system.matrices(s)
+        K = K - (system.K0 - system.asm.K)
+        H = self.Q.T @ K @ self.Q
+        return H, f, float(np.linalg.cond(H))
+
+    def static(self, system, s: np.ndarray, F: np.ndarray) -> np.ndarray:
+        """Static deflection of ``system`` in contact state ``s`` under the generalised force
+        ``F`` (d'Alembert-balanced on the free modes, M-orthogonal to them)."""
+        H, f, _ = self._stiffness(system, s)
+        return self._solve(H, f, F)
+
+    def _solve(self, H, f, F):
+        g = F + f
+        g = g - self.MR @ (self.RtMR_inv @ (self.R.T @ g))
+        q = self.Q @ np.linalg.solve(H, self.Q.T @ g)
+        return q - self.R @ (self.RtMR_inv @ (self.MR.T @ q))
+
+    def shift(self, old, new, s: np.ndarray, F_old: np.ndarray, F_new: np.ndarray):
+        """``q_st(new) - q_st(old)`` in contact state ``s``. A state that holds the structure
+        poorly (a gear free in its backlash: the static problem is singular or nearly so,
+        condition above ``1e3`` times that of the nominal state) is replaced by the nominal
+        state (front flanks closed), which moves the bearing and support deflections the
+        same way; the tooth deflections then carry over unchanged."""
+        nominal = new.asm.contacts.nominal
+        states = [s] if np.array_equal(s, nominal) else [s, nominal]
+        ref = self._stiffness(new, nominal)[2]
+        for state in states:
+            Hn, fn, cn = self._stiffness(new, state)
+            if cn > 1e3 * ref and state is not nominal:
+                continue
+            Ho, fo, _ = self._stiffness(old, state)
+            return self._solve(Hn, fn, F_new) - self._solve(Ho, fo, F_old)
+        return np.zeros(len(F_new))

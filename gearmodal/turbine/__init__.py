@@ -8,10 +8,12 @@ True
 """
 
 from .airfoil import Airfoil
+from .drivetrain import DrivetrainResult, simulate_drivetrain
 from .generator import InductionGenerator
 from .rotor import LOAD_COLUMNS, Rotor
 from .turbine import Turbine, TurbineResult, load_turbine, simulate_turbine
 from .wind import Wind
 
-__all__ = ["LOAD_COLUMNS", "Airfoil", "InductionGenerator", "Rotor", "Turbine",
-           "TurbineResult", "Wind", "load_turbine", "simulate_turbine"]
+__all__ = ["LOAD_COLUMNS", "Airfoil", "DrivetrainResult", "InductionGenerator", "Rotor",
+           "Turbine", "TurbineResult", "Wind", "load_turbine", "simulate_drivetrain",
+           "simulate_turbine"]

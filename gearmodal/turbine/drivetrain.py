@@ -1,0 +1,384 @@
+"""The turbine and the gearbox in one run: aerodynamics, generator and the gearbox's contact
+dynamics together (DESIGN 2.5, paper section 5; issue 5's multirate scheme).
+
+The gearbox model (``600kw.toml``: rotor inertia, main shaft, stages, generator, housing on its
+suspension) carries the whole drivetrain, so its free rotation is the turbine's rotation. Its
+coordinates ``q`` are deflections from a rigid reference rotation ``psi_ref(t) = psi_f +
+Omega_f (t - t_f)`` frozen at the last refreeze time ``t_f``; the rotor's azimuth and speed are
+``psi_ref + q_rotor`` and ``Omega_f + v_rotor``. Two rates:
+
+- **aerodynamic step** ``aero_dt`` (the turbine's own rate): the wind is sampled at the rotating
+  blade elements and the blade-element momentum loads are evaluated at the rotor's actual
+  azimuth and speed. Across the gearbox steps of an aerodynamic step the loads are
+  ``aero_hold="interpolate"`` (default): interpolated linearly to the loads at the step's end,
+  evaluated there at the azimuth predicted with the current speed, so the load is continuous;
+  ``"hold"``: held (a step at every aerodynamic step, which rings the gearbox);
+  ``"linear"``: extrapolated from the last two samples (also discontinuous). Their error
+  against evaluating at every gearbox step is measured in ``benchmarks/turbine_speed.py``.
+- **gearbox step** ``dt``: the exact piecewise-linear integrator (or any ``method`` of
+  :func:`gearmodal.simulate`) with every contact event. The shaft-end force (global axes) is
+  mapped onto the rotating carrier at each gearbox step's azimuth, exactly.
+
+The induction generator enters the linear gearbox equations as its tangent at the reference
+speed: torque ``T(w_f) + (dT/dw) (w - w_f)``, i.e. a constant load plus a viscous damper
+``dT/dw`` on the generator's rotation, so its strong slip damping is implicit (no step
+limit). At each **refreeze** (when the reference has turned ``refreeze_deg`` since the last one,
+its speed has drifted by ``refreeze_speed``, or the generator cuts in) the drivetrain's rigid
+rotation is moved out of ``q`` into the reference (``phi = r^T M q / r^T M r`` with ``r`` the
+free rotation mode; likewise the speed), and the gearbox geometry, speed terms and generator
+tangent are refrozen at the middle of the next segment (:mod:`gearmodal.integrate.refreeze`).
+Refreezes fall on aerodynamic steps.
+
+Loads on the gearbox: the rotor's aerodynamic torque on ``rotor.torque``, the generator torque
+on ``generator.torque`` and the shaft-end force on the first planetary carrier
+(``stageN.carrier.force_x`` = global ``y``, ``force_y`` = global ``z``): the rear main-bearing
+reaction of :meth:`gearmodal.turbine.Turbine.rear_force` (rotor weight, thrust, tilt and yaw
+moments, shear forces). Gravity on the gearbox internals is not modelled.
+
+The mounting azimuth ``Turbine.mounting_azimuth_deg`` is the angle from blade 1 to planet 1 in
+the direction of rotation: 0 puts planet 1 on blade 1's radius.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import scipy.linalg as sla
+
+from ..errors import ModelError
+from ..integrate import METHODS, SimulationResult, _result, reconcile
+from ..integrate.refreeze import AzimuthAssembler, QuasiStaticTransport
+from ..integrate.system import PiecewiseLinearSystem
+from ..static import equilibrium
+from .rotor import LOAD_COLUMNS
+from .turbine import RPM, Turbine, TurbineResult
+from .wind import Wind
+
+HOLDS = ("interpolate", "hold", "linear")
+
+
+@dataclass
+class DrivetrainResult:
+    """A turbine + gearbox run.
+
+    turbine : :class:`TurbineResult` at the aerodynamic rate (rotor speed and azimuth are the
+        gearbox model's rotor, rigid reference plus deflection).
+    gearbox : :class:`gearmodal.SimulationResult` at the gearbox step: forces, event log,
+        double contact, load sharing. Its ``q``, ``v`` are elastic deflections: the rigid
+        drivetrain rotation is removed (it is in ``turbine.loads``).
+    stats : CPU seconds split into ``aero_s`` (blade-element momentum), ``wind_s`` (wind
+        sampling; ``wind_setup_s`` the turbulence box), ``gearbox_s`` (refreezes and
+        integration), with ``cpu_s`` total and ``realtime_ratio`` (simulated s per CPU s,
+        without the one-off turbulence box).
+    """
+
+    turbine: TurbineResult
+    gearbox: SimulationResult
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def cut_in_time(self) -> float | None:
+        return self.turbine.cut_in_time
+
+    def to_frame(self) -> pd.DataFrame:
+        """The turbine loads at the aerodynamic rate."""
+        return self.turbine.loads
+
+    def plot(self):
+        """Rotor speed, power and the planet-1 tooth forces against time; returns the Figure."""
+        import matplotlib.pyplot as plt
+
+        fig, axs = plt.subplots(3, 1, sharex=True, figsize=(9, 8))
+        d = self.turbine.loads
+        axs[0].plot(d.index, d["rotor_speed_rpm"])
+        axs[0].set_ylabel("rotor speed [rpm]")
+        axs[1].plot(d.index, d["power_W"] / 1e3)
+        axs[1].set_ylabel("electrical power [kW]")
+        self.gearbox.plot(ax=axs[2])
+        if self.cut_in_time is not None:
+            for a in axs:
+                a.axvline(self.cut_in_time, color="0.6", ls="--", lw=0.8)
+        fig.tight_layout()
+        return fig
+
+    def save(self, directory) -> Path:
+        """Write the turbine loads (``turbine_loads.csv``, ``turbine.json``), the gearbox results
+        (``forces.csv``, ``events.csv``, ``q.csv``, ``v.csv``, ``settings.json``) and
+        ``stats.json``."""
+        d = self.turbine.save(directory)
+        self.gearbox.save(d)
+        (d / "stats.json").write_text(json.dumps(self.stats, indent=2))
+        return d
+
+
+def _names(asm, ends: str) -> str | None:
+    hits = [n for n in asm.load_names if n.endswith(ends)]
+    return hits[0] if hits else None
+
+
+def _accelerating_equilibrium(asm, r: np.ndarray, speed_rpm: float, loads: dict) -> np.ndarray:
+    """Deflections of the drivetrain accelerating rigidly under ``loads``: the static
+    equilibrium under the loads plus the d'Alembert force ``-M r alpha`` with ``alpha = r^T F /
+    r^T M r``, which together do no work on the free rotation. The start of a run: no
+    artificial impact when the teeth take up the initial torque."""
+    Mr = asm.M @ r
+    alpha = float(r @ asm.load_vector(loads)) / float(r @ Mr)
+    ext = dataclasses.replace(asm, B=np.column_stack([asm.B, -Mr]),
+                              load_names=[*asm.load_names, "rigid_acceleration"])
+    q = equilibrium(ext, {**loads, "rigid_acceleration": alpha}, speed_rpm).q.to_numpy()
+    return q - r * float(Mr @ q) / float(r @ Mr)
+
+
+def rigid_rotation(asm) -> np.ndarray:
+    """The free rotation mode ``r`` of the drivetrain (every wheel turning at its speed ratio),
+    normalised to 1 on the rotor; raises when the gearbox has no such mode."""
+    c = asm.contacts
+    Kc = asm.K + (c.W.T * c.stiffness) @ c.W  # all flanks closed: the stiffest connection
+    w, V = sla.eigh(Kc, asm.M)
+    if not (len(w) > 1 and abs(w[0]) <= 1e-8 * abs(w[1])):
+        raise ModelError("gearbox", "has no free drivetrain rotation: the rotor and generator "
+                         "must be free to turn (no torsional support to ground)")
+    r = V[:, 0]
+    i = asm.dof_names.index("rotor.theta")
+    return r / r[i]
+
+
+def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
+                        dt: float = 2e-3, aero_dt: float = 0.02, aero_hold: str = "interpolate",
+                        rotor_speed0_rpm: float = 6.0, azimuth0_deg: float = 0.0,
+                        connected: bool = False, refreeze_deg: float = 2.0,
+                        refreeze_speed: float = 0.01, quasi_static: bool = True,
+                        method: str = "exact", progress=None,
+                        **options) -> DrivetrainResult:
+    """Run turbine and gearbox together from ``rotor_speed0_rpm`` for ``t_end`` s.
+
+    Parameters
+    ----------
+    turbine : :class:`Turbine` (rotor, generator, main-shaft geometry, mounting azimuth).
+    wind : :class:`Wind`.
+    gearbox : :class:`gearmodal.Model` of the drivetrain with bodies ``rotor`` and
+        ``generator`` and a planetary stage (``studies/models/600kw.toml``).
+    t_end : s. dt : gearbox propagation and output step, s. aero_dt : aerodynamic step, s (a
+        whole multiple of ``dt``). aero_hold : ``"interpolate"``, ``"hold"`` or ``"linear"``
+        (module docstring).
+    rotor_speed0_rpm, azimuth0_deg : initial rotor speed and blade-1 azimuth.
+    connected : start with the generator on the grid (else it cuts in at synchronous speed).
+    refreeze_deg : azimuth between refreezes, deg. refreeze_speed : relative speed drift that
+        forces a refreeze. quasi_static : carry the state across a refreeze by the change of
+        the static solution (:class:`~gearmodal.integrate.refreeze.QuasiStaticTransport`);
+        ``False`` keeps ``q`` as it is and the gearbox feels a step at every refreeze.
+    method : ``"exact"``, ``"newmark"`` or ``"scipy"``; ``options`` go to it.
+    progress : ``progress(i, n)`` per aerodynamic step (the solver never prints).
+    """
+    for label, val in (("t_end", t_end), ("dt", dt), ("aero_dt", aero_dt),
+                       ("refreeze_deg", refreeze_deg), ("refreeze_speed", refreeze_speed)):
+        if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
+            raise ModelError(label, f"= {val!r}: must be a finite number > 0")
+    m_sub = round(aero_dt / dt)
+    if m_sub < 1 or abs(m_sub * dt - aero_dt) > 1e-9 * aero_dt:
+        raise ModelError("aero_dt", f"= {aero_dt!r}: must be a whole multiple of dt = {dt!r}")
+    if aero_hold not in HOLDS:
+        raise ModelError("aero_hold", f"= {aero_hold!r}: must be one of {HOLDS}")
+    if method not in METHODS:
+        raise ModelError("method", f"= {method!r}: must be one of {', '.join(METHODS)}")
+    if not (isinstance(rotor_speed0_rpm, (int, float)) and rotor_speed0_rpm >= 0):
+        raise ModelError("rotor_speed0_rpm", f"= {rotor_speed0_rpm!r}: must be >= 0 rpm")
+    if wind.turbulence_intensity > 0 and wind.duration < t_end:
+        raise ModelError("wind.duration", f"= {wind.duration}: shorter than t_end = {t_end}")
+    cpu0 = time.process_time()
+    clock = {"aero_s": 0.0, "wind_s": 0.0, "wind_setup_s": 0.0}
+    if wind.turbulence_intensity > 0:
+        tw = time.process_time()
+        wind._turbulence()
+        clock["wind_setup_s"] = time.process_time() - tw
+
+    geo = AzimuthAssembler(gearbox)
+    asm0 = geo.template
+    for name in ("rotor.theta", "generator.theta"):
+        if name not in asm0.dof_names:
+            raise ModelError("gearbox", f"has no DOF {name!r}: the drivetrain model needs "
+                             "bodies 'rotor' and 'generator' (see studies/models/600kw.toml)")
+    carrier_x = _names(asm0, ".carrier.force_x")
+    if carrier_x is None:
+        raise ModelError("gearbox", "has no planetary carrier load 'stageN.carrier.force_x' "
+                         "to carry the shaft-end force")
+    carrier_y = carrier_x[:-1] + "y"
+    n = asm0.n
+    i_rot, i_gen = asm0.dof_names.index("rotor.theta"), asm0.dof_names.index("generator.theta")
+    j_rot, j_gen = asm0.load_names.index("rotor.torque"), asm0.load_names.index("generator.torque")
+    j_fx, j_fy = asm0.load_names.index(carrier_x), asm0.load_names.index(carrier_y)
+    r = rigid_rotation(asm0)
+    transport = QuasiStaticTransport(r[:, None], asm0.M) if quasi_static else None
+    Mr = asm0.M @ r
+    J = float(r @ Mr)
+    g_ratio = float(r[i_gen])  # generator speed per rotor speed, signed
+    sg = math.copysign(1.0, g_ratio)
+    gen = turbine.generator
+    rot = turbine.rotor
+    mount = math.radians(turbine.mounting_azimuth_deg) + 0.5 * math.pi  # planet 1 on blade 1
+
+    def gen_tangent(w):
+        """(T, dT/dw) of the generator at speed w (rad/s), Kloss (generator.py)."""
+        s_ = gen.slip(w)
+        sk, tk = gen.pullout_slip, gen.pullout_torque
+        if s_ == 0.0:
+            return 0.0, 2 * tk / (sk * gen.omega_sync)
+        den = s_ / sk + sk / s_
+        return 2 * tk / den, -2 * tk * (1 / sk - sk / s_**2) / den**2 / gen.omega_sync
+
+    def aero(ta, psi, om, reset):
+        """Hub loads at time ``ta``, blade-1 azimuth ``psi``, speed ``om``; timed."""
+        tw = time.process_time()
+        y, z, psib = rot.positions(psi)
+        vel = wind.velocity(ta, y, z + turbine.hub_height)
+        vt = -vel[1] * np.cos(psib)[:, None] - vel[2] * np.sin(psib)[:, None]
+        tv = time.process_time()
+        out = rot.loads(om, psi, vel[0], vt, reset=reset)
+        clock["wind_s"] += tv - tw
+        clock["aero_s"] += time.process_time() - tv
+        return out
+
+    n_aero = int(math.ceil(t_end / aero_dt - 1e-9))
+    n_steps = n_aero * m_sub
+    runner = METHODS[method]
+    om_f = rotor_speed0_rpm * RPM  # reference speed and azimuth of the current freeze
+    psi_f = math.radians(azimuth0_deg)
+    t_f = 0.0
+    x = np.zeros(2 * n)
+    s = None
+    on = bool(connected)
+    cut_in = 0.0 if on else None
+    freeze_until = 0
+    system = None
+    T0 = 0.0
+    rows, Xs, Ss, events, segs = [], [np.zeros((1, 2 * n))], [], [], []
+    stats: dict = {"n_freezes": 0}
+    prev = ld_next = None
+    for k in range(n_aero):
+        t = k * aero_dt
+        psi = psi_f + om_f * (t - t_f) + x[i_rot]
+        om = om_f + x[n + i_rot]
+        # -- aerodynamics at the rotor's actual azimuth and speed ("interpolate": also at
+        # the end of the step, predicted with the current speed)
+        if aero_hold == "interpolate":
+            if k == 0:
+                ld = aero(t, psi, om, True)
+            else:
+                ld = ld_next
+            ld_next = aero(t + aero_dt, psi + om * aero_dt, om, False)
+        else:
+            ld = aero(t, psi, om, k == 0)
+        fy, fz = turbine.rear_force(ld)
+        w_gen = sg * (g_ratio * om_f + x[n + i_gen])  # generator speed, forward positive
+        switched = False
+        if not on and w_gen >= gen.omega_sync:
+            on, cut_in, switched = True, t, True
+        tg = gen.torque(w_gen) if on else 0.0
+        rows.append((t, om / RPM, math.degrees(psi) % 360.0, on, tg, tg * w_gen,
+                     *(ld[c] for c in LOAD_COLUMNS), fy, fz))
+        # -- loads on the gearbox over this aerodynamic step (held or extrapolated)
+        tt = t + dt * np.arange(m_sub + 1)
+        u_now = np.array([ld["torque_Nm"], fy, fz])
+        if aero_hold == "interpolate":
+            u_next = np.array([ld_next["torque_Nm"], *turbine.rear_force(ld_next)])
+            u = u_now[None, :] + np.outer((tt - t) / aero_dt, u_next - u_now)
+        elif aero_hold == "linear" and prev is not None:
+            u = u_now[None, :] + np.outer((tt - t) / aero_dt, u_now - prev)
+        else:
+            u = np.repeat(u_now[None, :], m_sub + 1, axis=0)
+        prev = u_now
+        drift = abs(om - om_f) > refreeze_speed * max(abs(om_f), 1e-3)
+        j = 0
+        while j < m_sub:
+            kk = k * m_sub + j  # gearbox step index
+            tj = kk * dt
+            # -- refreeze: rigid rotation into the reference; geometry, speed, generator
+            if system is None or kk >= freeze_until or (j == 0 and (switched or drift)):
+                phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
+                psi_f, om_f, t_f = psi_f + om_f * (tj - t_f) + phi, om_f + dom, tj
+                x[:n] -= r * phi
+                x[n:] -= r * dom
+                n_seg = max(1, int(math.radians(refreeze_deg) / max(abs(om_f) * dt, 1e-300)))
+                freeze_until = min(kk + n_seg, n_steps)
+                asm = geo.assemble(psi_f + om_f * dt * (freeze_until - kk) / 2 + mount)
+                T0_old = T0
+                T0, c_gen = gen_tangent(sg * g_ratio * om_f) if on else (0.0, 0.0)
+                if c_gen:
+                    asm.C = asm.C.copy()
+                    asm.C[i_gen, i_gen] += c_gen  # the generator's tangent damping
+                old, system = system, PiecewiseLinearSystem(asm, om_f / RPM)
+                loads_j = {"rotor.torque": u[j, 0], carrier_x: u[j, 1], carrier_y: u[j, 2]}
+                if s is None:
+                    x[:n] = _accelerating_equilibrium(
+                        asm, r, om_f / RPM, {**loads_j, "generator.torque": -sg * T0})
+                    s = system.penetration(x) > 0
+                    s_init = s.copy()
+                else:
+                    if transport is not None:
+                        B_t = geo.load_map(psi_f + mount)[0]
+                        F_ext = (B_t[:, j_rot] * u[j, 0] + B_t[:, j_fx] * u[j, 1]
+                                 + B_t[:, j_fy] * u[j, 2])
+                        # the same generator torque on both sides: the tangent's constant
+                        # part moves with the reference speed, but the torque T0 + c v_gen
+                        # does not jump (v_gen is re-based with it)
+                        F_ext = F_ext - sg * T0_old * B_t[:, j_gen]
+                        x[:n] += transport.shift(old, system, s, F_ext + old.f_const,
+                                                 F_ext + system.f_const)
+                    s = reconcile(system, x, s, tj, events)
+                stats["n_freezes"] += 1
+                segs.append([kk, kk, system])
+            j_end = min(m_sub, freeze_until - k * m_sub)
+            Bt = geo.load_map(om_f * (tt[j:j_end + 1] - t_f) + psi_f + mount)
+            uj = u[j:j_end + 1]
+            F = (uj[:, :1] * Bt[:, :, j_rot] + uj[:, 1:2] * Bt[:, :, j_fx]
+                 + uj[:, 2:3] * Bt[:, :, j_fy] - sg * T0 * Bt[:, :, j_gen]
+                 + system.f_const[None, :])
+            X, S, ev, st = runner(system, dt, j_end - j, F, x, s, **options)
+            events += [(te + tj, *rest) for te, *rest in ev]
+            if not Ss:
+                Ss.append(S[:1])
+            Xs.append(X[1:])
+            Ss.append(S[1:])
+            x, s = X[-1].copy(), S[-1].copy()
+            segs[-1][1] = k * m_sub + j_end
+            j = j_end
+            for key, val in st.items():
+                if isinstance(val, (int, float)):
+                    stats[key] = stats.get(key, 0) + val
+        if not math.isfinite(om):
+            raise ModelError("simulate_drivetrain", f"rotor speed not finite at t = {t:.3f} s")
+        if progress is not None:
+            progress(k + 1, n_aero)
+    X, S = np.concatenate(Xs), np.concatenate(Ss)
+    t_grid = np.arange(n_steps + 1) * dt
+    cpu = time.process_time() - cpu0
+    clock["gearbox_s"] = cpu - clock["aero_s"] - clock["wind_s"] - clock["wind_setup_s"]
+    stats.update(clock)
+    stats.update(cpu_s=cpu, n_events=len(events), n_steps=n_steps,
+                 realtime_ratio=n_aero * aero_dt / max(cpu - clock["wind_setup_s"], 1e-12))
+    settings = {"turbine": turbine.name, "gearbox": getattr(gearbox, "name", ""),
+                "t_end": t_end, "dt": dt, "aero_dt": aero_dt, "aero_hold": aero_hold,
+                "rotor_speed0_rpm": rotor_speed0_rpm, "azimuth0_deg": azimuth0_deg,
+                "mounting_azimuth_deg": turbine.mounting_azimuth_deg,
+                "refreeze_deg": refreeze_deg, "refreeze_speed": refreeze_speed,
+                "method": method, "options": options,
+                "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
+    sim = _result([tuple(sg_) for sg_ in segs], t_grid, X, S, events, s_init, stats,
+                  settings)
+    # elastic deflections: the rigid rotation (re-based at each refreeze) taken out
+    Q, V = X[:, :n], X[:, n:]
+    sim.q = pd.DataFrame(Q - np.outer(Q @ Mr / J, r), index=sim.q.index, columns=sim.q.columns)
+    sim.v = pd.DataFrame(V - np.outer(V @ Mr / J, r), index=sim.v.index, columns=sim.v.columns)
+    cols = ["time", "rotor_speed_rpm", "azimuth_deg", "generator_connected",
+            "generator_torque_Nm", "power_W", *LOAD_COLUMNS, "rear_force_y_N",
+            "rear_force_z_N"]
+    loads = pd.DataFrame(rows, columns=cols).set_index("time")
+    tres = TurbineResult(loads=loads, cut_in_time=cut_in, settings=settings)
+    return DrivetrainResult(turbine=tres, gearbox=sim, stats=stats)
