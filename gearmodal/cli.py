@@ -1,4 +1,6 @@
-"""Command line: ``gearmodal campbell|modal|info MODEL.toml``, ``gearmodal simulate SCENE.toml``.
+"""Command line: ``gearmodal campbell|modal|info MODEL.toml``, ``gearmodal simulate SCENE.toml``
+(a gearbox scene with loads, loads from an aeroelastic output file, or the turbine in wind
+with the gearbox: see :mod:`gearmodal.scene`).
 
 Input errors (:class:`gearmodal.ModelError`, missing files) are printed as one line without a
 traceback and the exit status is 2.
@@ -101,9 +103,29 @@ def cmd_simulate(args) -> int:
 
     scene = load_scene(args.scene)
     if args.t_end is not None:
+        if not args.t_end > 0:
+            raise ModelError("--t-end", f"= {args.t_end!r}: must be > 0 s")
         scene.t_end = args.t_end
-    sim = scene.simulate()
-    out = sim.save(args.out)
+        if scene.wind is not None and scene.wind.duration < args.t_end:
+            scene.wind.duration = args.t_end + 1.0
+    run = None
+    if scene.turbine is not None:
+        from tqdm import tqdm
+
+        with tqdm(total=int(round(scene.t_end / scene.drivetrain.get("aero_dt", 0.02))),
+                  desc="turbine + gearbox", unit="step", disable=args.quiet) as bar:
+            run = scene.simulate(progress=lambda i, n: bar.update(1))
+        sim = run.gearbox
+        out = run.save(args.out)
+        fig = run.plot()
+        fig.savefig(out / "drivetrain.png", dpi=130)
+        plt.close(fig)
+        fig = run.turbine.plot()
+        fig.savefig(out / "turbine.png", dpi=130)
+        plt.close(fig)
+    else:
+        sim = scene.simulate()
+        out = sim.save(args.out)
     fig = sim.plot()
     fig.savefig(out / "forces.png", dpi=130)
     plt.close(fig)
@@ -112,6 +134,16 @@ def cmd_simulate(args) -> int:
     ls = sim.load_sharing()
     if ls.shape[1]:
         ls.to_csv(out / "load_sharing.csv", index_label="time")
+    if run is not None:
+        st = run.stats
+        cut = run.cut_in_time
+        power = run.turbine.loads["power_W"]
+        tail = power[power.index >= power.index[-1] / 2].mean() / 1e3
+        print(f"cut-in at {cut:.2f} s" if cut is not None else "no cut-in", end="; ")
+        print(f"mean power over the second half {tail:.0f} kW; "
+              f"{st['realtime_ratio']:.2f} simulated s per CPU s (aero {st['aero_s']:.2g} s, "
+              f"wind {st['wind_s'] + st['wind_setup_s']:.2g} s, gearbox "
+              f"{st['gearbox_s']:.2g} s); wrote {out}/turbine_loads.csv, drivetrain.png")
     print(f"{len(sim.events)} contact events, {len(dc)} double-contact episodes, "
           f"{sim.stats['cpu_s']:.3g} s CPU; wrote {out}/events.csv, forces.csv, forces.png")
     return 0
@@ -152,6 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("scene", help="scene file (TOML), see gearmodal/scene.py")
     sm.add_argument("--out", required=True, help="output folder")
     sm.add_argument("--t-end", type=float, dest="t_end", help="override the end time, s")
+    sm.add_argument("--quiet", action="store_true", help="no progress bar")
     sm.set_defaults(func=cmd_simulate)
     i = sub.add_parser("info", help="model summary and DOF names")
     i.add_argument("model")

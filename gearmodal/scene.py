@@ -20,6 +20,32 @@ Example (``studies/scenes/gear_rattle.toml``)::
 A load is a number, a table ``{mean, amplitude, frequency_hz, phase_deg}`` (a sinusoid about
 the mean), or ``"balance"``: the value that makes the loads' mean do no work on the model's free
 rigid-body mode (at most one load may say so).
+
+Loads from an aeroelastic code's output file (HAWC2 or OpenFAST, :mod:`gearmodal.io`)::
+
+    [load_file]
+    path = "run.outb"                    # relative to this file
+    format = "openfast"                  # openfast | hawc2 (default: from the extension)
+    t_start = 0.0                        # s of the file that becomes t = 0
+    [load_file.mapping]                  # gearmodal load name = channel, or [channel, factor]
+    "rotor.torque" = "RotTorq"
+
+The turbine in wind, simulated together with the gearbox model of ``scene.model``
+(:func:`gearmodal.turbine.simulate_drivetrain`)::
+
+    [turbine]
+    file = "../models/600kw_turbine.toml"
+    rotor_speed0_rpm = 6.0               # start-up from low speed; the generator cuts in
+    connected = false
+    mounting_azimuth_deg = 0.0           # overrides the turbine file's
+    aero_dt = 0.02                       # s, aerodynamic step
+    aero_hold = "interpolate"            # interpolate | hold | linear
+    refreeze_deg = 2.0
+
+    [wind]                               # gearmodal.turbine.Wind fields
+    mean_speed = 10.0
+    turbulence_intensity = 0.12
+    seed = 1
 """
 
 from __future__ import annotations
@@ -34,7 +60,11 @@ from .model import validate as v
 from .model.model import Model
 
 _SCENE_KEYS = {"model", "t_end", "dt", "method", "speed_rpm"}
-_TOP = {"scene", "loads", "q0", "v0", "options"}
+_TOP = {"scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind"}
+_TURBINE_KEYS = {"file", "rotor_speed0_rpm", "azimuth0_deg", "connected",
+                 "mounting_azimuth_deg", "aero_dt", "aero_hold", "refreeze_deg",
+                 "refreeze_speed"}
+_LOAD_FILE_KEYS = {"path", "format", "t_start", "mapping"}
 _WAVE = {"mean", "amplitude", "frequency_hz", "phase_deg"}
 
 
@@ -52,9 +82,21 @@ class Scene:
     v0: dict = field(default_factory=dict)
     options: dict = field(default_factory=dict)
     source: str = ""
+    turbine: object = None  # gearmodal.turbine.Turbine when the scene has [turbine]
+    wind: object = None
+    drivetrain: dict = field(default_factory=dict)
 
-    def simulate(self):
-        """Run :func:`gearmodal.simulate` with this scene's settings."""
+    def simulate(self, progress=None):
+        """Run the scene: :func:`gearmodal.simulate` on the model with the scene's loads, or,
+        with a ``[turbine]`` table, :func:`gearmodal.turbine.simulate_drivetrain` (returns a
+        :class:`~gearmodal.turbine.DrivetrainResult`). ``progress(i, n)`` is passed to the
+        turbine run."""
+        if self.turbine is not None:
+            from .turbine import simulate_drivetrain
+
+            return simulate_drivetrain(self.turbine, self.wind, self.model, self.t_end,
+                                       dt=self.dt, method=self.method, progress=progress,
+                                       **self.drivetrain, **self.options)
         from .integrate import simulate
 
         return simulate(self.model, self.t_end, dt=self.dt, loads=self.loads, q0=self.q0,
@@ -116,6 +158,9 @@ def _scene(doc: dict, p: Path) -> Scene:
     method = v.choice("scene.method", sc.get("method", "exact"), ("exact", "newmark", "scipy"))
     speed = v.nonnegative("scene.speed_rpm", sc.get("speed_rpm", 0.0), "rpm")
     loads, means, balance = {}, {}, None
+    if "load_file" in doc:
+        for name, ser in _load_file(doc["load_file"], p).items():
+            loads[name], means[name] = ser, float(ser.mean())
     for name, spec in doc.get("loads", {}).items():
         f = f"loads.{name}"
         if spec == "balance":
@@ -138,5 +183,70 @@ def _scene(doc: dict, p: Path) -> Scene:
     q0 = {k: v.number(f"q0.{k}", x, "m or rad") for k, x in doc.get("q0", {}).items()}
     v0 = {k: v.number(f"v0.{k}", x, "m/s or rad/s") for k, x in doc.get("v0", {}).items()}
     options = dict(doc.get("options", {}))
+    turbine, wind, drivetrain = None, None, {}
+    if "turbine" in doc:
+        if loads or "load_file" in doc:
+            raise ModelError("turbine", "a turbine scene computes its own loads: remove "
+                             "[loads] and [load_file]")
+        turbine, wind, drivetrain = _turbine(doc["turbine"], doc.get("wind", {}), p, t_end)
+    elif "wind" in doc:
+        raise ModelError("wind", "needs a [turbine] table")
     return Scene(model=model, t_end=t_end, dt=dt, method=method, speed_rpm=speed, loads=loads,
-                 q0=q0, v0=v0, options=options, source=str(p))
+                 q0=q0, v0=v0, options=options, source=str(p), turbine=turbine, wind=wind,
+                 drivetrain=drivetrain)
+
+
+def _load_file(spec: dict, p: Path) -> dict:
+    """``[load_file]``: loads as Series from an aeroelastic output file."""
+    from .io import read_loads, shaft_loads
+
+    if not isinstance(spec, dict):
+        raise ModelError("load_file", "expected a table with path and mapping")
+    for key in spec:
+        if key not in _LOAD_FILE_KEYS:
+            raise ModelError(f"load_file.{key}", "unknown key; allowed: "
+                             + ", ".join(sorted(_LOAD_FILE_KEYS)))
+    for key in ("path", "mapping"):
+        if key not in spec:
+            raise ModelError(f"load_file.{key}", "missing")
+    if not isinstance(spec["mapping"], dict) or not spec["mapping"]:
+        raise ModelError("load_file.mapping", "expected a table: load name = channel")
+    path = p.parent / str(spec["path"])
+    if not path.exists():
+        raise ModelError("load_file.path", f"= {str(spec['path'])!r}: no such file ({path})")
+    data = read_loads(path, spec.get("format"))
+    t0 = v.nonnegative("load_file.t_start", spec.get("t_start", 0.0), "s")
+    return shaft_loads(data, dict(spec["mapping"]), t_start=t0)
+
+
+def _turbine(spec: dict, wspec: dict, p: Path, t_end: float):
+    """``[turbine]`` and ``[wind]``: the turbine, its wind and the drivetrain run options."""
+    from .turbine import Wind, load_turbine
+
+    if not isinstance(spec, dict) or "file" not in spec:
+        raise ModelError("turbine.file", "missing: the turbine file (TOML)")
+    for key in spec:
+        if key not in _TURBINE_KEYS:
+            raise ModelError(f"turbine.{key}", "unknown key; allowed: "
+                             + ", ".join(sorted(_TURBINE_KEYS)))
+    turbine = load_turbine(p.parent / str(spec["file"]))
+    if "mounting_azimuth_deg" in spec:
+        turbine.mounting_azimuth_deg = v.number("turbine.mounting_azimuth_deg",
+                                                spec["mounting_azimuth_deg"], "deg")
+    opts = {}
+    for key in ("rotor_speed0_rpm", "azimuth0_deg", "aero_dt", "refreeze_deg",
+                "refreeze_speed"):
+        if key in spec:
+            opts[key] = v.number(f"turbine.{key}", spec[key], "")
+    if "connected" in spec:
+        opts["connected"] = bool(spec["connected"])
+    if "aero_hold" in spec:
+        opts["aero_hold"] = v.choice("turbine.aero_hold", spec["aero_hold"],
+                                     ("interpolate", "hold", "linear"))
+    fields = {f for f in Wind.__dataclass_fields__}
+    for key in wspec:
+        if key not in fields:
+            raise ModelError(f"wind.{key}", "unknown key; allowed: " + ", ".join(sorted(fields)))
+    wargs = {"hub_height": turbine.hub_height, "half_width": 1.1 * turbine.rotor.radius,
+             "duration": t_end + 1.0, **wspec}
+    return turbine, Wind(**wargs), opts

@@ -88,6 +88,43 @@ class AzimuthAssembler:
         return dataclasses.replace(t, **{f: v[f] for f in _FIELDS}, contacts=contacts,
                                    springs=springs, azimuth=float(azimuth))
 
+    def stiffness_rate(self, azimuth: float) -> np.ndarray:
+        """``dK/dpsi`` at ``azimuth`` (N/m per rad): the derivative of the interpolant; by
+        central differences of direct assemblies when the interpolant is not exact."""
+        if not self.exact:
+            h = 1e-5
+            return (self.model.assemble(azimuth=azimuth + h).K
+                    - self.model.assemble(azimuth=azimuth - h).K) / (2 * h)
+        a, b = self.coef["K"]
+        hs = self.harmonics
+        return (np.tensordot(-hs * np.sin(hs * azimuth), a, axes=1)
+                + np.tensordot(hs * np.cos(hs * azimuth), b, axes=1))
+
+    def spring_forces(self, azimuth: np.ndarray, rate: np.ndarray, Q: np.ndarray,
+                      V: np.ndarray, chunk: int = 2000) -> np.ndarray | None:
+        """Forces of the always-active springs at their exact geometry: ``k g + c g'`` with
+        ``g = W(psi) q`` and ``g' = W(psi) v + psi' W'(psi) q`` at each row's ``azimuth``
+        (rad) and azimuth rate ``rate`` (rad/s); ``None`` when the interpolant is not exact.
+        A frozen segment's rows would put a sawtooth of ``k |q| (psi - psi_mid)`` on springs
+        across turning frames (tens of kN on the 600 kW carrier bearing at 2 deg)."""
+        if not self.exact or "springs.W" not in self.coef:
+            return None
+        sp = self.template.springs
+        a, b = self.coef["springs.W"]
+        hs = self.harmonics
+        out = np.empty((len(azimuth), a.shape[1]))
+        for i in range(0, len(azimuth), chunk):
+            az = np.asarray(azimuth[i:i + chunk], dtype=float)
+            c, s = np.cos(np.outer(az, hs)), np.sin(np.outer(az, hs))
+            W = np.tensordot(c, a, axes=1) + np.tensordot(s, b, axes=1)
+            Wd = np.tensordot(-s * hs, a, axes=1) + np.tensordot(c * hs, b, axes=1)
+            q, v = Q[i:i + chunk], V[i:i + chunk]
+            g = np.einsum("tsn,tn->ts", W, q)
+            gd = (np.einsum("tsn,tn->ts", W, v)
+                  + rate[i:i + chunk, None] * np.einsum("tsn,tn->ts", Wd, q))
+            out[i:i + chunk] = g * sp.stiffness + gd * sp.damping
+        return out
+
     def load_map(self, azimuth: np.ndarray) -> np.ndarray:
         """``B`` at many azimuths at once, (len(azimuth), n, n_loads)."""
         az = np.atleast_1d(np.asarray(azimuth, dtype=float))
@@ -99,25 +136,30 @@ class AzimuthAssembler:
         return np.tensordot(c, a, axes=1) + np.tensordot(s, b, axes=1)
 
 
-class QuasiStaticTransport:
-    """Carry a state across a refreeze without an artificial jolt.
+class QuasiStatic:
+    """Static deflections for the first-order geometry correction of a frozen segment.
 
-    A frozen segment holds the geometry at its middle azimuth; the true geometry turns
-    continuously. A static deflection across frames turning against each other (a housing
-    sagging on its suspension under the rotor weight, seen from the rotating carrier) is
-    therefore held fixed in the rotating axes during a segment, and at the refreeze the
-    coupling rows turn by the segment's angle: the elastic forces would jump by about ``k |q|
-    dpsi`` (28 kN for the 600 kW carrier bearing at 1.45 deg) and ring the gearbox. Since the
-    geometry turns slowly against the elastic frequencies (0.4 Hz against 10 Hz and above),
-    the true response to it is quasi-static, so at a refreeze the state is shifted by the change
-    of the static solution from the old to the new frozen system, in the current contact state
-    ``s``::
+    A segment frozen at its middle azimuth ``psi_m`` holds ``K(psi_m)``; the true stiffness
+    ``K(psi(t))`` differs by ``K'(psi_m) (psi - psi_m)`` to first order. Springs across frames
+    turning against each other (the 600 kW carrier bearing between the rotating carrier and
+    the housing, which sags a millimetre on its suspension under the rotor weight) make that
+    difference act on large static deflections: left out, it rings the gearbox at the refreeze
+    rate (tens of kN on the 600 kW carrier bearing at 2 deg). The correction is applied as a
+    generalised force linear in time, exact under the first-order hold::
 
-        q <- q + q_st(new) - q_st(old),   K_s q_st = F + f_s - M R (R^T M R)^-1 R^T (F + f_s)
+        F_geo(t) = -K'(psi_m) q_st (psi(t) - psi_m)
 
-    with ``R`` the free (rigid-body) modes (d'Alembert: an accelerating drivetrain) and ``q_st``
-    M-orthogonal to them. Its cost is two linear solves per refreeze; its benefit is measured
-    in ``benchmarks/turbine_speed.py`` against a finely refrozen reference.
+    on the segment's static deflection ``q_st`` (:meth:`static`), not on the moving state: a
+    correction on the state is a lagged stiffness that destabilises long segments (measured:
+    unstable at 4 deg), one on the static deflection is a feed-forward input that cannot. Its
+    error against the time-varying system integrated by ``solve_ivp`` is measured in
+    ``tests/validation/test_refreeze_geometry.py``.
+
+    The static problem is ``K_s q = F + f_s - M R (R^T M R)^-1 R^T (F + f_s)``, with ``R`` the
+    free (rigid-body) modes (d'Alembert: an accelerating drivetrain) and ``q`` M-orthogonal to
+    them, solved without the centripetal softening (Lin & Parker's ``-m Omega^2`` terms also
+    soften the free rotation, the centrifugal preload that balances them not being modelled,
+    which makes the problem nearly singular along it).
     """
 
     def __init__(self, free: np.ndarray, M: np.ndarray):
@@ -132,19 +174,10 @@ class QuasiStaticTransport:
             self.Q = np.eye(M.shape[0])
 
     def _stiffness(self, system, s):
-        # without the centripetal softening: Lin & Parker's -m Omega^2 terms also soften the
-        # free rotation (the centrifugal preload that balances them is not modelled), which
-        # makes the static problem nearly singular along it at speed
         K, _, f = system.matrices(s)
-        K = K - (system.K0 - system.asm.K)
+        K = K - (system.K0 - system.asm.K)  # no centripetal softening (class docstring)
         H = self.Q.T @ K @ self.Q
         return H, f, float(np.linalg.cond(H))
-
-    def static(self, system, s: np.ndarray, F: np.ndarray) -> np.ndarray:
-        """Static deflection of ``system`` in contact state ``s`` under the generalised force
-        ``F`` (d'Alembert-balanced on the free modes, M-orthogonal to them)."""
-        H, f, _ = self._stiffness(system, s)
-        return self._solve(H, f, F)
 
     def _solve(self, H, f, F):
         g = F + f
@@ -152,19 +185,18 @@ class QuasiStaticTransport:
         q = self.Q @ np.linalg.solve(H, self.Q.T @ g)
         return q - self.R @ (self.RtMR_inv @ (self.MR.T @ q))
 
-    def shift(self, old, new, s: np.ndarray, F_old: np.ndarray, F_new: np.ndarray):
-        """``q_st(new) - q_st(old)`` in contact state ``s``. A state that holds the structure
-        poorly (a gear free in its backlash: the static problem is singular or nearly so,
-        condition above ``1e3`` times that of the nominal state) is replaced by the nominal
-        state (front flanks closed), which moves the bearing and support deflections the
-        same way; the tooth deflections then carry over unchanged."""
-        nominal = new.asm.contacts.nominal
-        states = [s] if np.array_equal(s, nominal) else [s, nominal]
-        ref = self._stiffness(new, nominal)[2]
-        for state in states:
-            Hn, fn, cn = self._stiffness(new, state)
-            if cn > 1e3 * ref and state is not nominal:
-                continue
-            Ho, fo, _ = self._stiffness(old, state)
-            return self._solve(Hn, fn, F_new) - self._solve(Ho, fo, F_old)
-        return np.zeros(len(F_new))
+    def static(self, system, s: np.ndarray, F: np.ndarray) -> np.ndarray:
+        """Static deflection of ``system`` under the generalised force ``F`` in contact state
+        ``s``; a state that holds the structure poorly (a gear free in its backlash: condition
+        above ``1e3`` times that of the nominal state) is replaced by the nominal state (front
+        flanks closed), which deflects the bearings and supports the same way. Zeros when
+        neither is regular."""
+        nominal = system.asm.contacts.nominal
+        Hn, fn, ref = self._stiffness(system, nominal)
+        if not np.array_equal(s, nominal):
+            H, f, cond = self._stiffness(system, s)
+            if cond <= 1e3 * ref:
+                return self._solve(H, f, F)
+        if ref < 1e14:
+            return self._solve(Hn, fn, F)
+        return np.zeros(len(F))

@@ -54,7 +54,7 @@ import scipy.linalg as sla
 
 from ..errors import ModelError
 from ..integrate import METHODS, SimulationResult, _result, reconcile
-from ..integrate.refreeze import AzimuthAssembler, QuasiStaticTransport
+from ..integrate.refreeze import AzimuthAssembler, QuasiStatic
 from ..integrate.system import PiecewiseLinearSystem
 from ..static import equilibrium
 from .rotor import LOAD_COLUMNS
@@ -154,7 +154,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                         dt: float = 2e-3, aero_dt: float = 0.02, aero_hold: str = "interpolate",
                         rotor_speed0_rpm: float = 6.0, azimuth0_deg: float = 0.0,
                         connected: bool = False, refreeze_deg: float = 2.0,
-                        refreeze_speed: float = 0.01, quasi_static: bool = True,
+                        refreeze_speed: float = 0.01, geometry_rate: bool = True,
                         method: str = "exact", progress=None,
                         **options) -> DrivetrainResult:
     """Run turbine and gearbox together from ``rotor_speed0_rpm`` for ``t_end`` s.
@@ -171,9 +171,9 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     rotor_speed0_rpm, azimuth0_deg : initial rotor speed and blade-1 azimuth.
     connected : start with the generator on the grid (else it cuts in at synchronous speed).
     refreeze_deg : azimuth between refreezes, deg. refreeze_speed : relative speed drift that
-        forces a refreeze. quasi_static : carry the state across a refreeze by the change of
-        the static solution (:class:`~gearmodal.integrate.refreeze.QuasiStaticTransport`);
-        ``False`` keeps ``q`` as it is and the gearbox feels a step at every refreeze.
+        forces a refreeze. geometry_rate : apply the first-order geometry correction of a
+        frozen segment (:class:`~gearmodal.integrate.refreeze.QuasiStatic`); ``False`` rings
+        the gearbox at the refreeze rate.
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``; ``options`` go to it.
     progress : ``progress(i, n)`` per aerodynamic step (the solver never prints).
     """
@@ -215,7 +215,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     j_rot, j_gen = asm0.load_names.index("rotor.torque"), asm0.load_names.index("generator.torque")
     j_fx, j_fy = asm0.load_names.index(carrier_x), asm0.load_names.index(carrier_y)
     r = rigid_rotation(asm0)
-    transport = QuasiStaticTransport(r[:, None], asm0.M) if quasi_static else None
+    statics = QuasiStatic(r[:, None], asm0.M)
     Mr = asm0.M @ r
     J = float(r @ Mr)
     g_ratio = float(r[i_gen])  # generator speed per rotor speed, signed
@@ -261,6 +261,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     rows, Xs, Ss, events, segs = [], [np.zeros((1, 2 * n))], [], [], []
     stats: dict = {"n_freezes": 0}
     prev = ld_next = None
+    az_grid, om_grid = np.zeros(n_steps + 1), np.zeros(n_steps + 1)  # reference carrier
     for k in range(n_aero):
         t = k * aero_dt
         psi = psi_f + om_f * (t - t_f) + x[i_rot]
@@ -307,39 +308,44 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 x[n:] -= r * dom
                 n_seg = max(1, int(math.radians(refreeze_deg) / max(abs(om_f) * dt, 1e-300)))
                 freeze_until = min(kk + n_seg, n_steps)
-                asm = geo.assemble(psi_f + om_f * dt * (freeze_until - kk) / 2 + mount)
-                T0_old = T0
+                psi_mid = psi_f + om_f * dt * (freeze_until - kk) / 2 + mount
+                asm = geo.assemble(psi_mid)
                 T0, c_gen = gen_tangent(sg * g_ratio * om_f) if on else (0.0, 0.0)
                 if c_gen:
                     asm.C = asm.C.copy()
                     asm.C[i_gen, i_gen] += c_gen  # the generator's tangent damping
-                old, system = system, PiecewiseLinearSystem(asm, om_f / RPM)
+                system = PiecewiseLinearSystem(asm, om_f / RPM)
                 loads_j = {"rotor.torque": u[j, 0], carrier_x: u[j, 1], carrier_y: u[j, 2]}
                 if s is None:
+                    # at the initial azimuth's exact geometry (the frozen segment with its
+                    # geometry correction reproduces it at t = 0)
                     x[:n] = _accelerating_equilibrium(
-                        asm, r, om_f / RPM, {**loads_j, "generator.torque": -sg * T0})
+                        geo.assemble(psi_f + mount), r, om_f / RPM,
+                        {**loads_j, "generator.torque": -sg * T0})
                     s = system.penetration(x) > 0
                     s_init = s.copy()
                 else:
-                    if transport is not None:
-                        B_t = geo.load_map(psi_f + mount)[0]
-                        F_ext = (B_t[:, j_rot] * u[j, 0] + B_t[:, j_fx] * u[j, 1]
-                                 + B_t[:, j_fy] * u[j, 2])
-                        # the same generator torque on both sides: the tangent's constant
-                        # part moves with the reference speed, but the torque T0 + c v_gen
-                        # does not jump (v_gen is re-based with it)
-                        F_ext = F_ext - sg * T0_old * B_t[:, j_gen]
-                        x[:n] += transport.shift(old, system, s, F_ext + old.f_const,
-                                                 F_ext + system.f_const)
                     s = reconcile(system, x, s, tj, events)
                 stats["n_freezes"] += 1
                 segs.append([kk, kk, system])
+                # first-order geometry correction on the static deflection, linear in time
+                # (exact under the first-order hold; QuasiStatic's docstring)
+                g_rate = np.zeros(n)
+                if geometry_rate and geo.exact:
+                    B_t = geo.load_map(psi_f + mount)[0]
+                    F_now = (B_t[:, j_rot] * u[j, 0] + B_t[:, j_fx] * u[j, 1]
+                             + B_t[:, j_fy] * u[j, 2] - sg * T0 * B_t[:, j_gen]
+                             + system.f_const)
+                    g_rate = -(geo.stiffness_rate(psi_mid) @ statics.static(system, s, F_now))
             j_end = min(m_sub, freeze_until - k * m_sub)
             Bt = geo.load_map(om_f * (tt[j:j_end + 1] - t_f) + psi_f + mount)
             uj = u[j:j_end + 1]
             F = (uj[:, :1] * Bt[:, :, j_rot] + uj[:, 1:2] * Bt[:, :, j_fx]
                  + uj[:, 2:3] * Bt[:, :, j_fy] - sg * T0 * Bt[:, :, j_gen]
-                 + system.f_const[None, :])
+                 + system.f_const[None, :]
+                 + np.outer(om_f * (tt[j:j_end + 1] - t_f) + psi_f + mount - psi_mid, g_rate))
+            az_grid[kk:k * m_sub + j_end + 1] = om_f * (tt[j:j_end + 1] - t_f) + psi_f + mount
+            om_grid[kk:k * m_sub + j_end + 1] = om_f
             X, S, ev, st = runner(system, dt, j_end - j, F, x, s, **options)
             events += [(te + tj, *rest) for te, *rest in ev]
             if not Ss:
@@ -372,8 +378,17 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
     sim = _result([tuple(sg_) for sg_ in segs], t_grid, X, S, events, s_init, stats,
                   settings)
-    # elastic deflections: the rigid rotation (re-based at each refreeze) taken out
+    # springs across turning frames at their exact geometry (not the segment's frozen rows)
     Q, V = X[:, :n], X[:, n:]
+    Fs = geo.spring_forces(az_grid, om_grid, Q, V)
+    if Fs is not None:
+        sp = asm0.springs
+        cols = {}
+        for e, (el, ct) in enumerate(zip(sp.element, sp.contact, strict=True)):
+            cols[f"{el}.{ct}"] = Fs[:, e]
+        for key, val in cols.items():
+            sim.forces[key] = val
+    # elastic deflections: the rigid rotation (re-based at each refreeze) taken out
     sim.q = pd.DataFrame(Q - np.outer(Q @ Mr / J, r), index=sim.q.index, columns=sim.q.columns)
     sim.v = pd.DataFrame(V - np.outer(V @ Mr / J, r), index=sim.v.index, columns=sim.v.columns)
     cols = ["time", "rotor_speed_rpm", "azimuth_deg", "generator_connected",
