@@ -153,7 +153,7 @@ def rigid_rotation(asm) -> np.ndarray:
 def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                         dt: float = 2e-3, aero_dt: float = 0.02, aero_hold: str = "interpolate",
                         rotor_speed0_rpm: float = 6.0, azimuth0_deg: float = 0.0,
-                        connected: bool = False, refreeze_deg: float = 2.0,
+                        connected: bool = False, refreeze_deg: float = 1.0,
                         refreeze_speed: float = 0.01, geometry_rate: bool = True,
                         method: str = "exact", progress=None,
                         **options) -> DrivetrainResult:
@@ -258,7 +258,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     freeze_until = 0
     system = None
     T0 = 0.0
-    rows, Xs, Ss, events, segs = [], [np.zeros((1, 2 * n))], [], [], []
+    rows, Xs, Ss, events, segs = [], [], [], [], []
     stats: dict = {"n_freezes": 0}
     prev = ld_next = None
     az_grid, om_grid = np.zeros(n_steps + 1), np.zeros(n_steps + 1)  # reference carrier
@@ -348,8 +348,9 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             om_grid[kk:k * m_sub + j_end + 1] = om_f
             X, S, ev, st = runner(system, dt, j_end - j, F, x, s, **options)
             events += [(te + tj, *rest) for te, *rest in ev]
-            if not Ss:
+            if not Ss:  # the initial state (the accelerating equilibrium)
                 Ss.append(S[:1])
+                Xs.append(X[:1])
             Xs.append(X[1:])
             Ss.append(S[1:])
             x, s = X[-1].copy(), S[-1].copy()
