@@ -23,7 +23,7 @@ from ..errors import ModelError
 from ..model.model import Model
 from .exact import run_exact
 from .newmark import run_newmark
-from .refreeze import AzimuthAssembler
+from .refreeze import AzimuthAssembler, QuasiStatic
 from .result import EVENT_COLUMNS, SimulationResult
 from .scipy_ref import run_scipy
 from .system import PiecewiseLinearSystem
@@ -159,8 +159,13 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     system0 = None
     seg_systems = []
     geometry = model
+    statics = None
     if len(segments) > 1 and isinstance(model, Model):
         geometry = AzimuthAssembler(model)  # exact and ~20x cheaper than assembling anew
+        if geometry.exact:
+            from ..static import free_modes
+
+            statics = QuasiStatic(free_modes(asm), asm.M)
     for k0, k1, azimuth in segments:
         seg_asm = asm if len(segments) == 1 else geometry.assemble(azimuth=azimuth)
         if casm is not None and len(segments) > 1:
@@ -182,6 +187,10 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         ts = t[k0:k1 + 1]
         U = _load_grid(seg_asm, loads, ts)
         F = U @ seg_asm.B.T + system.f_const[None, :]
+        if statics is not None:
+            # first-order geometry correction on the static deflection (QuasiStatic)
+            g = -(geometry.stiffness_rate(azimuth) @ statics.static(system, s, F[0]))
+            F = F + np.outer(om * ts - azimuth, g)
         X, S, ev, st = runner(system, dt, k1 - k0, F, x, s, **options)
         off = k0 * dt
         events += [(te + off, *rest) for te, *rest in ev]
@@ -201,6 +210,12 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
                     "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
                               for k, v in (loads or {}).items()},
                     "q0": q0 or {}, "v0": v0 or {}})
+    if statics is not None:  # springs across turning frames at their exact geometry
+        n = asm.n
+        Fs = geometry.spring_forces(om * t, np.full(len(t), om), X[:, :n], X[:, n:])
+        sp = asm.springs
+        for e, (el, ct) in enumerate(zip(sp.element, sp.contact, strict=True)):
+            result.forces[f"{el}.{ct}"] = Fs[:, e]
     if casm is not None:
         _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm)
     return result
