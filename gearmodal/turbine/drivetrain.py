@@ -26,8 +26,11 @@ limit). At each **refreeze** (when the reference has turned ``refreeze_deg`` sin
 its speed has drifted by ``refreeze_speed``, or the generator cuts in) the drivetrain's rigid
 rotation is moved out of ``q`` into the reference (``phi = r^T M q / r^T M r`` with ``r`` the
 free rotation mode; likewise the speed), and the gearbox geometry, speed terms and generator
-tangent are refrozen at the middle of the next segment (:mod:`gearmodal.integrate.refreeze`).
-Refreezes fall on aerodynamic steps.
+tangent are refrozen at the middle of the next segment (:mod:`gearmodal.integrate.refreeze`),
+with the first-order geometry correction on the static deflection
+(:class:`~gearmodal.integrate.refreeze.QuasiStatic`). Refreezes fall on gearbox steps; the
+angle refreeze is the accuracy knob (error first order in ``refreeze_deg``, measured in
+``benchmarks/RESULTS.md``).
 
 Loads on the gearbox: the rotor's aerodynamic torque on ``rotor.torque``, the generator torque
 on ``generator.torque`` and the shaft-end force on the first planetary carrier
