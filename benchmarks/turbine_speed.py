@@ -78,29 +78,29 @@ def main(argv=None) -> int:
     wind = gm.turbine.Wind(**{**fields, "duration": max(t_start, 3.0) + 1.0})
     rows = []
 
-    def run(study, setting, t_end, **kw):
+    def run(t_end, **kw):
         t = time.process_time()
         res = simulate_drivetrain(tb, wind, gb, t_end, **kw)
         return res, time.process_time() - t
 
     simulate_drivetrain(tb, gm.turbine.Wind(mean_speed=10.0), gb, 0.1, rotor_speed0_rpm=22.3,
                         connected=True)  # numba compile (cached)
-    res, cpu = run("speed", "start-up", t_start, dt=scene.dt, **scene.drivetrain)  # builds box
+    res, cpu = run(t_start, dt=scene.dt, **scene.drivetrain)  # builds box
     rows.append(_row("speed", f"start-up {t_start:g} s, dt {scene.dt:g} s", res, cpu))
     print(rows[-1], flush=True)
     on = {"rotor_speed0_rpm": 22.3, "connected": True}
     t2 = 1.5 if args.quick else 2.0
-    ref, cpu = run("multirate", "every step", t2, dt=2e-3, aero_dt=2e-3, **on)
+    ref, cpu = run(t2, dt=2e-3, aero_dt=2e-3, **on)
     rows.append(_row("multirate", "aero every gearbox step (2 ms)", ref, cpu, 0.0))
     for hold, adt in (("interpolate", 0.02), ("hold", 0.02), ("linear", 0.02),
                       ("interpolate", 0.05)):
-        res, cpu = run("multirate", hold, t2, dt=2e-3, aero_dt=adt, aero_hold=hold, **on)
+        res, cpu = run(t2, dt=2e-3, aero_dt=adt, aero_hold=hold, **on)
         rows.append(_row("multirate", f"aero {adt:g} s {hold}", res, cpu, _error(res, ref)))
         print(rows[-1], flush=True)
-    ref, cpu = run("refreeze", "0.25", t2, dt=1e-3, aero_dt=0.02, refreeze_deg=0.25, **on)
+    ref, cpu = run(t2, dt=1e-3, aero_dt=0.02, refreeze_deg=0.25, **on)
     rows.append(_row("refreeze", "0.25 deg, dt 1 ms", ref, cpu, 0.0))
     for deg in (0.5, 1.0, 2.0, 5.0):
-        res, cpu = run("refreeze", str(deg), t2, dt=1e-3, aero_dt=0.02, refreeze_deg=deg, **on)
+        res, cpu = run(t2, dt=1e-3, aero_dt=0.02, refreeze_deg=deg, **on)
         rows.append(_row("refreeze", f"{deg:g} deg, dt 1 ms", res, cpu, _error(res, ref)))
         print(rows[-1], flush=True)
     df = pd.DataFrame(rows)

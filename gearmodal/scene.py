@@ -188,6 +188,13 @@ def _scene(doc: dict, p: Path) -> Scene:
         if loads or "load_file" in doc:
             raise ModelError("turbine", "a turbine scene computes its own loads: remove "
                              "[loads] and [load_file]")
+        for key in ("q0", "v0"):
+            if doc.get(key):
+                raise ModelError(key, "a turbine scene starts from the accelerating "
+                                 "equilibrium: remove [" + key + "]")
+        if "speed_rpm" in sc:
+            raise ModelError("scene.speed_rpm", "a turbine scene's speed is the rotor's: "
+                             "set turbine.rotor_speed0_rpm instead")
         turbine, wind, drivetrain = _turbine(doc["turbine"], doc.get("wind", {}), p, t_end)
     elif "wind" in doc:
         raise ModelError("wind", "needs a [turbine] table")

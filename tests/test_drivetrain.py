@@ -60,7 +60,6 @@ def test_gearbox_carries_the_rotor_loads(cut_in_run):
     fy = f["stage1.carrier_bearing.y"][f.index > 2.0].mean()  # gearbox y = shaft z
     k_eff = 1.0 / (1.0 / 1e9 + 1.0 / 2e7)
     assert abs(fy) == pytest.approx(abs(lz) * k_eff / (k_eff + 1e7), rel=0.05)
-    assert coupled.gearbox.stats["n_events"] == len(coupled.gearbox.events)
     assert np.isfinite(f.to_numpy()).all()
 
 
@@ -76,7 +75,6 @@ def test_multirate_aero_step_error_is_small(parts):
     a, b = fine.gearbox.forces[col], coarse.gearbox.forces[col]
     assert np.abs(a - b).max() < 0.02 * a.abs().max()
     assert a.iloc[0] > 0.5 * a.max()  # the run starts loaded (accelerating equilibrium)
-    assert coarse.stats["realtime_ratio"] > 0
 
 
 def test_bad_input_names_the_field(parts):
@@ -99,7 +97,7 @@ def test_turbine_scene_cli_writes_loads_events_forces_figures(tmp_path):
                  "turbine.png", "forces.png", "stats.json"):
         assert (tmp_path / name).exists(), name
     loads = pd.read_csv(tmp_path / "turbine_loads.csv", index_col="time")
-    assert loads["rotor_speed_rpm"].iloc[0] == pytest.approx(6.0)
+    assert len(loads) == 10 and loads["torque_Nm"].gt(0).all()  # 0.2 s at 20 ms, driving
     scene = load_scene("studies/scenes/600kw_turbine_10ms.toml")
     assert scene.wind.turbulence_intensity == pytest.approx(0.12)
     assert scene.drivetrain["aero_dt"] == pytest.approx(0.02)

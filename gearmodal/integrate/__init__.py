@@ -192,6 +192,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
             g = -(geometry.stiffness_rate(azimuth) @ statics.static(system, s, F[0]))
             F = F + np.outer(om * ts - azimuth, g)
         X, S, ev, st = runner(system, dt, k1 - k0, F, x, s, **options)
+        system.__dict__.pop("_exact_integrators", None)  # the segment is closed
         off = k0 * dt
         events += [(te + off, *rest) for te, *rest in ev]
         Xs.append(X if not Xs else X[1:])

@@ -11,6 +11,10 @@ coefficients (exact interpolation of a degree-``D`` trigonometric polynomial), c
 interpolant against a direct assembly at an azimuth off the sample grid, and then evaluates any
 azimuth for the cost of a few array sums instead of a full assembly. Models for which the check
 fails (other frame speed ratios) are assembled directly at every refreeze.
+
+:class:`QuasiStatic` gives the static deflection on which each frozen segment's first-order
+geometry correction acts (its docstring says why the correction is needed and how it is
+applied).
 """
 
 from __future__ import annotations

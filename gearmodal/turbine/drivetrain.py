@@ -8,13 +8,13 @@ Omega_f (t - t_f)`` frozen at the last refreeze time ``t_f``; the rotor's azimut
 ``psi_ref + q_rotor`` and ``Omega_f + v_rotor``. Two rates:
 
 - **aerodynamic step** ``aero_dt`` (the turbine's own rate): the wind is sampled at the rotating
-  blade elements and the blade-element momentum loads are evaluated at the rotor's actual
-  azimuth and speed. Across the gearbox steps of an aerodynamic step the loads are
-  ``aero_hold="interpolate"`` (default): interpolated linearly to the loads at the step's end,
-  evaluated there at the azimuth predicted with the current speed, so the load is continuous;
-  ``"hold"``: held (a step at every aerodynamic step, which rings the gearbox);
-  ``"linear"``: extrapolated from the last two samples (also discontinuous). Their error
-  against evaluating at every gearbox step is measured in ``benchmarks/turbine_speed.py``.
+  blade elements and the blade-element momentum loads evaluated. Across the gearbox steps of an
+  aerodynamic step the loads are ``aero_hold="interpolate"`` (default): interpolated linearly
+  to the loads at the step's end, evaluated at the azimuth predicted there with the current
+  speed, so the load is continuous; ``"hold"``: evaluated at the step's start and held (a
+  jump at every aerodynamic step, which rings the gearbox); ``"linear"``: extrapolated from
+  the last two samples (also discontinuous). Their error against evaluating at every gearbox
+  step is measured in ``benchmarks/turbine_speed.py``.
 - **gearbox step** ``dt``: the exact piecewise-linear integrator (or any ``method`` of
   :func:`gearmodal.simulate`) with every contact event. The shaft-end force (global axes) is
   mapped onto the rotating carrier at each gearbox step's azimuth, exactly.
@@ -29,8 +29,10 @@ free rotation mode; likewise the speed), and the gearbox geometry, speed terms a
 tangent are refrozen at the middle of the next segment (:mod:`gearmodal.integrate.refreeze`),
 with the first-order geometry correction on the static deflection
 (:class:`~gearmodal.integrate.refreeze.QuasiStatic`). Refreezes fall on gearbox steps; the
-angle refreeze is the accuracy knob (error first order in ``refreeze_deg``, measured in
-``benchmarks/RESULTS.md``).
+angle is the accuracy knob (the error grows between first and second order in
+``refreeze_deg``, measured in ``benchmarks/RESULTS.md``). ``psi_mid`` assumes the segment runs
+its full angle; a refreeze forced early (speed drift, cut-in) leaves it off-centre, which the
+geometry correction absorbs to first order.
 
 Loads on the gearbox: the rotor's aerodynamic torque on ``rotor.torque``, the generator torque
 on ``generator.torque`` and the shaft-end force on the first planetary carrier
@@ -61,7 +63,7 @@ from ..integrate.refreeze import AzimuthAssembler, QuasiStatic
 from ..integrate.system import PiecewiseLinearSystem
 from ..static import equilibrium
 from .rotor import LOAD_COLUMNS
-from .turbine import RPM, Turbine, TurbineResult
+from .turbine import RPM, TURBINE_COLUMNS, Turbine, TurbineResult
 from .wind import Wind
 
 HOLDS = ("interpolate", "hold", "linear")
@@ -227,23 +229,12 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     rot = turbine.rotor
     mount = math.radians(turbine.mounting_azimuth_deg) + 0.5 * math.pi  # planet 1 on blade 1
 
-    def gen_tangent(w):
-        """(T, dT/dw) of the generator at speed w (rad/s), Kloss (generator.py)."""
-        s_ = gen.slip(w)
-        sk, tk = gen.pullout_slip, gen.pullout_torque
-        if s_ == 0.0:
-            return 0.0, 2 * tk / (sk * gen.omega_sync)
-        den = s_ / sk + sk / s_
-        return 2 * tk / den, -2 * tk * (1 / sk - sk / s_**2) / den**2 / gen.omega_sync
-
     def aero(ta, psi, om, reset):
         """Hub loads at time ``ta``, blade-1 azimuth ``psi``, speed ``om``; timed."""
         tw = time.process_time()
-        y, z, psib = rot.positions(psi)
-        vel = wind.velocity(ta, y, z + turbine.hub_height)
-        vt = -vel[1] * np.cos(psib)[:, None] - vel[2] * np.sin(psib)[:, None]
+        bw = turbine.blade_wind(wind, ta, psi)
         tv = time.process_time()
-        out = rot.loads(om, psi, vel[0], vt, reset=reset)
+        out = rot.loads(om, psi, *bw, reset=reset)
         clock["wind_s"] += tv - tw
         clock["aero_s"] += time.process_time() - tv
         return out
@@ -313,10 +304,12 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 freeze_until = min(kk + n_seg, n_steps)
                 psi_mid = psi_f + om_f * dt * (freeze_until - kk) / 2 + mount
                 asm = geo.assemble(psi_mid)
-                T0, c_gen = gen_tangent(sg * g_ratio * om_f) if on else (0.0, 0.0)
+                T0, c_gen = gen.tangent(sg * g_ratio * om_f) if on else (0.0, 0.0)
                 if c_gen:
                     asm.C = asm.C.copy()
                     asm.C[i_gen, i_gen] += c_gen  # the generator's tangent damping
+                if system is not None:  # a closed segment's propagators are not needed again
+                    system.__dict__.pop("_exact_integrators", None)
                 system = PiecewiseLinearSystem(asm, om_f / RPM)
                 loads_j = {"rotor.torque": u[j, 0], carrier_x: u[j, 1], carrier_y: u[j, 2]}
                 if s is None:
@@ -347,8 +340,11 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                  + uj[:, 2:3] * Bt[:, :, j_fy] - sg * T0 * Bt[:, :, j_gen]
                  + system.f_const[None, :]
                  + np.outer(om_f * (tt[j:j_end + 1] - t_f) + psi_f + mount - psi_mid, g_rate))
-            az_grid[kk:k * m_sub + j_end + 1] = om_f * (tt[j:j_end + 1] - t_f) + psi_f + mount
-            om_grid[kk:k * m_sub + j_end + 1] = om_f
+            # the row at kk was written by the previous segment (before the re-basing)
+            a0 = 0 if kk == 0 else 1
+            az_grid[kk + a0:k * m_sub + j_end + 1] = (om_f * (tt[j + a0:j_end + 1] - t_f)
+                                                      + psi_f + mount)
+            om_grid[kk + a0:k * m_sub + j_end + 1] = om_f
             X, S, ev, st = runner(system, dt, j_end - j, F, x, s, **options)
             events += [(te + tj, *rest) for te, *rest in ev]
             if not Ss:  # the initial state (the accelerating equilibrium)
@@ -387,17 +383,11 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     Fs = geo.spring_forces(az_grid, om_grid, Q, V)
     if Fs is not None:
         sp = asm0.springs
-        cols = {}
         for e, (el, ct) in enumerate(zip(sp.element, sp.contact, strict=True)):
-            cols[f"{el}.{ct}"] = Fs[:, e]
-        for key, val in cols.items():
-            sim.forces[key] = val
+            sim.forces[f"{el}.{ct}"] = Fs[:, e]
     # elastic deflections: the rigid rotation (re-based at each refreeze) taken out
     sim.q = pd.DataFrame(Q - np.outer(Q @ Mr / J, r), index=sim.q.index, columns=sim.q.columns)
     sim.v = pd.DataFrame(V - np.outer(V @ Mr / J, r), index=sim.v.index, columns=sim.v.columns)
-    cols = ["time", "rotor_speed_rpm", "azimuth_deg", "generator_connected",
-            "generator_torque_Nm", "power_W", *LOAD_COLUMNS, "rear_force_y_N",
-            "rear_force_z_N"]
-    loads = pd.DataFrame(rows, columns=cols).set_index("time")
+    loads = pd.DataFrame(rows, columns=TURBINE_COLUMNS).set_index("time")
     tres = TurbineResult(loads=loads, cut_in_time=cut_in, settings=settings)
     return DrivetrainResult(turbine=tres, gearbox=sim, stats=stats)

@@ -51,6 +51,16 @@ class InductionGenerator:
         """Slip at generator speed ``omega`` (rad/s), positive when generating."""
         return (omega - self.omega_sync) / self.omega_sync
 
+    def tangent(self, omega: float) -> tuple[float, float]:
+        """``(T, dT/domega)`` at ``omega`` (rad/s): the braking torque (N m) and its slope
+        (N m s/rad), from the Kloss curve in the module docstring."""
+        s = self.slip(omega)
+        sk, tk = self.pullout_slip, self.pullout_torque
+        if s == 0.0:
+            return 0.0, 2 * tk / (sk * self.omega_sync)
+        den = s / sk + sk / s
+        return 2 * tk / den, -2 * tk * (1 / sk - sk / s**2) / den**2 / self.omega_sync
+
     def torque(self, omega: float) -> float:
         """Braking torque (N m) on the generator shaft at ``omega`` (rad/s), connected."""
         s = self.slip(omega)

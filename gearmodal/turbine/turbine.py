@@ -39,6 +39,10 @@ from .rotor import LOAD_COLUMNS, Rotor
 from .wind import Wind
 
 RPM = math.pi / 30
+#: columns of a turbine run's loads table (TurbineResult.loads, with "time" the index)
+TURBINE_COLUMNS = ["time", "rotor_speed_rpm", "azimuth_deg", "generator_connected",
+                   "generator_torque_Nm", "power_W", *LOAD_COLUMNS, "rear_force_y_N",
+                   "rear_force_z_N"]
 
 
 @dataclass
@@ -64,6 +68,15 @@ class Turbine:
                              f"rear_bearing > front_bearing > 0 m")
         if not self.inertia > 0 or not self.gear_ratio > 0:
             raise ModelError("turbine.inertia", "inertia and gear_ratio must be > 0")
+
+    def blade_wind(self, wind: Wind, t: float, psi: float):
+        """Wind at the blade elements at time ``t`` (s) and blade-1 azimuth ``psi`` (rad):
+        ``(u, vt)``, normal to the rotor and in plane along the blade motion, m/s, each
+        (blades, n), for :meth:`Rotor.loads`."""
+        y, z, psib = self.rotor.positions(psi)
+        vel = wind.velocity(t, y, z + self.hub_height)
+        vt = -vel[1] * np.cos(psib)[:, None] - vel[2] * np.sin(psib)[:, None]
+        return vel[0], vt
 
     def rear_force(self, ld: dict) -> tuple[float, float]:
         """``(y, z)`` force of the shaft end on the gearbox, N (module docstring)."""
@@ -174,7 +187,7 @@ def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 
     gen = turbine.generator
     ratio = turbine.gear_ratio
     # generator slip stiffness at the rotor: ratio^2 dT/domega at synchronous speed
-    c_gen = ratio**2 * 2 * gen.pullout_torque / (gen.pullout_slip * gen.omega_sync)
+    c_gen = ratio**2 * gen.tangent(gen.omega_sync)[1]
     if dt > turbine.inertia / c_gen:
         raise ModelError("dt", f"= {dt!r}: longer than the generator's slip time constant "
                          f"{turbine.inertia / c_gen:.3g} s; the explicit step would be unstable")
@@ -189,10 +202,7 @@ def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 
     rows = []
 
     def aero(t, om, ps, reset=False):
-        y, z, psib = rot.positions(ps)
-        vel = wind.velocity(t, y, z + turbine.hub_height)
-        vt = -vel[1] * np.cos(psib)[:, None] - vel[2] * np.sin(psib)[:, None]
-        return rot.loads(om, ps, vel[0], vt, reset=reset)
+        return rot.loads(om, ps, *turbine.blade_wind(wind, t, ps), reset=reset)
 
     def gen_torque(om):
         return gen.torque(om * ratio) if on else 0.0
@@ -221,10 +231,7 @@ def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 
             raise ModelError("simulate_turbine", f"rotor speed not finite at t = {t:.3f} s")
         if progress is not None:
             progress(k + 1, n)
-    cols = ["time", "rotor_speed_rpm", "azimuth_deg", "generator_connected",
-            "generator_torque_Nm", "power_W", *LOAD_COLUMNS, "rear_force_y_N",
-            "rear_force_z_N"]
-    df = pd.DataFrame(rows, columns=cols).set_index("time")
+    df = pd.DataFrame(rows, columns=TURBINE_COLUMNS).set_index("time")
     return TurbineResult(loads=df, cut_in_time=cut_in,
                          settings={"turbine": turbine.name, "t_end": t_end, "dt": dt,
                                    "rotor_speed0_rpm": rotor_speed0_rpm,
