@@ -53,3 +53,16 @@ def test_spectral_bound(drivetrain, speed, damping):
     assert bound >= rho * (1 - 1e-12)
     if damping == 0.0 and speed < 100:
         assert bound <= 1.05 * rho  # tight when lightly damped (the model: ~5 % on meshes)
+
+
+def test_input_basis_rejects_a_force_outside_it(drivetrain):
+    asm = drivetrain.assemble(azimuth=0.3)
+    sy = PiecewiseLinearSystem(asm, 22.1)
+    j = asm.load_names.index("rotor.torque")
+    sy.set_inputs(asm.B[:, [j]])
+    assert sy.P.shape[1] < asm.n  # the torque column plus the back flanks' offset forces
+    F = np.outer([1.0, 2.0], asm.B[:, j])
+    assert np.allclose(sy.reduce(F) @ sy.P.T, F)
+    k = asm.load_names.index("stage1.carrier.force_x")
+    with pytest.raises(gm.ModelError, match="input basis"):
+        sy.reduce(np.outer([1.0, 2.0], asm.B[:, k]))

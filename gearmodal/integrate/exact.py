@@ -58,10 +58,10 @@ class ExactIntegrator:
         st = d.get("stack")
         if st is None:
             J = self.prop.taylor_level(s)
-            N, n = 2 * self.n, self.n
+            N, m = 2 * self.n, self.sys.MinvU.shape[1]
             st = {"J": J, "resolve": self.prop.resolve_level(s),
-                  "PHI": np.zeros((J + 1, N, N)), "G0": np.zeros((J + 1, N, n)),
-                  "G1": np.zeros((J + 1, N, n)), "FS": np.zeros((J + 1, N)),
+                  "PHI": np.zeros((J + 1, N, N)), "G0": np.zeros((J + 1, N, m)),
+                  "G1": np.zeros((J + 1, N, m)), "FS": np.zeros((J + 1, N)),
                   "have": np.zeros(J + 1, dtype=bool), "sgn": np.where(s, -1.0, 1.0)}
             d["stack"] = st
         return d, st
@@ -82,7 +82,7 @@ class ExactIntegrator:
         while True:
             d, st = self.stacks(s)
             status, t_new, x_new, mask, level = advance_state(
-                st["PHI"], st["G0"], st["G1"], st["FS"], st["have"], d["A"], sysm.Minv, d["f"],
+                st["PHI"], st["G0"], st["G1"], st["FS"], st["have"], d["A"], sysm.MinvU, d["f"],
                 sysm.W, sysm.offset, st["sgn"], x, t, t_end, tk, F0, F1, self.dt,
                 st["resolve"], st["J"], GRAZE_MARGIN, TAYLOR_TERMS, TAYLOR_SAMPLES,
                 SIMULTANEOUS * self.dt)
@@ -120,7 +120,8 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     """Integrate ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
 
     ``F_grid`` (n_steps + 1, n) is the generalised force at the output times (linear in
-    between). Returns ``(X, S, events, stats)``: states (n_steps + 1, 2n), contact states
+    between); with an input basis on the system it must lie in it (checked). Returns
+    ``(X, S, events, stats)``: states (n_steps + 1, 2n), contact states
     (n_steps + 1, n_contacts), events as tuples (time, contact, before, after, rate, force).
     """
     # the propagators belong to the frozen system: callers that advance one system in several
@@ -136,7 +137,7 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     S = np.empty((n_steps + 1, system.n_contacts), dtype=bool)
     X[0], S[0] = x0, s0
     x, s = x0.astype(float).copy(), s0.copy()
-    F_grid = np.ascontiguousarray(F_grid, dtype=float)
+    F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))  # input basis, if any
     events: list = []
     k = 0
     while k < n_steps:

@@ -44,7 +44,7 @@ class PiecewiseLinearSystem:
     speed_rpm : input speed; gyroscopic, centripetal and centrifugal terms are frozen at it.
     """
 
-    def __init__(self, asm: Assembly, speed_rpm: float = 0.0):
+    def __init__(self, asm: Assembly, speed_rpm: float = 0.0, inputs: np.ndarray | None = None):
         self.asm = asm
         n = asm.n
         self.n = n
@@ -65,6 +65,46 @@ class PiecewiseLinearSystem:
         self.k = c.stiffness.copy()
         self.c = c.damping.copy()
         self.names = [f"{e}:{f}" for e, f in zip(c.element, c.contact, strict=True)]
+        # Optional input basis P (n x m, orthonormal): every generalised force of a run lies in
+        # span(P), so the exact propagators need only the m columns Minv P instead of Minv
+        # (Van Loan's augmented matrix 2n + 2m instead of 4n). The contacts' constant forces
+        # (gaps with an offset) are added to the span, so every contact state's f_s is in it.
+        self.P = None
+        self.MinvU = self.Minv
+        if inputs is not None:
+            self.set_inputs(inputs)
+
+    def set_inputs(self, inputs: np.ndarray) -> None:
+        """Set the input basis from spanning columns ``inputs`` (n, k): every generalised force
+        given to the exact method must then lie in their span (with the contacts' constant
+        forces); call before the first propagation of this system."""
+        if "_exact_integrators" in self.__dict__:
+            raise ModelError("inputs", "set the input basis before the first propagation")
+        n = self.n
+        cols = [np.asarray(inputs, dtype=float).reshape(n, -1)]
+        hit = self.offset != 0.0
+        if np.any(hit):
+            cols.append((self.W[hit] * (self.k[hit] * self.offset[hit])[:, None]).T)
+        U = np.concatenate(cols, axis=1)
+        U = U[:, np.abs(U).max(axis=0) > 0]
+        Q, R, _ = sla.qr(U, mode="economic", pivoting=True)
+        d = np.abs(np.diag(R))
+        rank = int(np.sum(d > 1e-12 * max(d.max(initial=0.0), 1e-300)))
+        if rank < n:  # else the basis saves nothing
+            self.P = np.ascontiguousarray(Q[:, :rank])
+            self.MinvU = np.ascontiguousarray(self.Minv @ self.P)
+
+    def reduce(self, F: np.ndarray) -> np.ndarray:
+        """Generalised forces (rows, n) in the input basis (rows, m); checks that they lie in
+        it (a force outside it would be silently dropped)."""
+        if self.P is None:
+            return F
+        Fr = F @ self.P
+        scale = max(float(np.abs(F).max(initial=0.0)), 1e-300)
+        if np.abs(F - Fr @ self.P.T).max(initial=0.0) > 1e-9 * scale:
+            raise ModelError("inputs", "a generalised force lies outside the system's input "
+                             "basis; give the basis every load column the run uses")
+        return np.ascontiguousarray(Fr)
 
     @property
     def n_contacts(self) -> int:
@@ -100,8 +140,14 @@ class PiecewiseLinearSystem:
             return 0.0
         K, C, _ = self.matrices(s)
         Li = self.Linv
-        k = np.linalg.norm(Li @ K @ Li.T, 2)
-        c = np.linalg.norm(Li @ C @ Li.T, 2)
+        Kh = Li @ K @ Li.T
+        # |K^| by its eigenvalues when symmetric (cheaper than the SVD); |C^| <= its Frobenius
+        # norm, a bound as valid and tight when the damping is light
+        if np.allclose(Kh, Kh.T, rtol=0, atol=1e-12 * np.abs(Kh).max(initial=1e-300)):
+            k = float(np.abs(np.linalg.eigvalsh(0.5 * (Kh + Kh.T))).max(initial=0.0))
+        else:
+            k = np.linalg.norm(Kh, 2)
+        c = np.linalg.norm(Li @ C @ Li.T)
         return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
 
     def penetration(self, x: np.ndarray) -> np.ndarray:
@@ -157,6 +203,8 @@ class Propagators:
         d = self._states.get(key)
         if d is None:
             A, f = self.system.first_order(s)
+            if self.system.P is not None:
+                f = self.system.P.T @ f  # in the input basis (f_s is in its span)
             rho = max(self.system.spectral_bound(s), 1e-300)
             d = {"A": A, "f": f, "rho": rho, "levels": {}}
             self._states[key] = d
@@ -189,14 +237,15 @@ class Propagators:
         """Van Loan's augmented exponential (module docstring) over one step ``h``."""
         sys = self.system
         N, n = 2 * sys.n, sys.n
-        Z = np.zeros((N + 2 * n, N + 2 * n))
+        m = sys.MinvU.shape[1]  # n, or the input basis' size
+        Z = np.zeros((N + 2 * m, N + 2 * m))
         Z[:N, :N] = A * h
-        Z[n:N, N:N + n] = sys.Minv * h
-        Z[N:N + n, N + n:] = np.eye(n)
+        Z[n:N, N:N + m] = sys.MinvU * h
+        Z[N:N + m, N + m:] = np.eye(m)
         E = sla.expm(Z)
         self.n_exponentials += 1
-        Ga = E[:N, N:N + n]
-        Gb = E[:N, N + n:]
+        Ga = E[:N, N:N + m]
+        Gb = E[:N, N + m:]
         return (np.ascontiguousarray(E[:N, :N]), np.ascontiguousarray(Ga - Gb),
                 np.ascontiguousarray(Gb))
 
