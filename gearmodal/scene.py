@@ -104,10 +104,19 @@ class Scene:
                         **self.options)
 
 
-def _wave(field_: str, spec: dict):
+def _check_keys(table: str, spec: dict, allowed, required=()) -> None:
+    """Errors naming ``table.key`` for an unknown or a missing key of a scene table."""
     for key in spec:
-        if key not in _WAVE:
-            raise ModelError(f"{field_}.{key}", "unknown key; allowed: " + ", ".join(sorted(_WAVE)))
+        if key not in allowed:
+            raise ModelError(f"{table}.{key}", "unknown key; allowed: "
+                             + ", ".join(sorted(allowed)))
+    for key in required:
+        if key not in spec:
+            raise ModelError(f"{table}.{key}", "missing")
+
+
+def _wave(field_: str, spec: dict):
+    _check_keys(field_, spec, _WAVE)
     mean = v.number(f"{field_}.mean", spec.get("mean", 0.0), "N or N m")
     amp = v.number(f"{field_}.amplitude", spec.get("amplitude", 0.0), "N or N m")
     f = v.nonnegative(f"{field_}.frequency_hz", spec.get("frequency_hz", 0.0), "Hz")
@@ -141,13 +150,7 @@ def _scene(doc: dict, p: Path) -> Scene:
     sc = doc.get("scene")
     if not isinstance(sc, dict):
         raise ModelError("scene", "missing: the [scene] table with model, t_end, dt")
-    for key in sc:
-        if key not in _SCENE_KEYS:
-            raise ModelError(f"scene.{key}", "unknown key; allowed: "
-                             + ", ".join(sorted(_SCENE_KEYS)))
-    for key in ("model", "t_end", "dt"):
-        if key not in sc:
-            raise ModelError(f"scene.{key}", "missing")
+    _check_keys("scene", sc, _SCENE_KEYS, ("model", "t_end", "dt"))
     if not isinstance(sc["model"], str):
         raise ModelError("scene.model", f"= {sc['model']!r}: expected a path to a model file")
     from .model.toml_io import load
@@ -209,13 +212,7 @@ def _load_file(spec: dict, p: Path) -> dict:
 
     if not isinstance(spec, dict):
         raise ModelError("load_file", "expected a table with path and mapping")
-    for key in spec:
-        if key not in _LOAD_FILE_KEYS:
-            raise ModelError(f"load_file.{key}", "unknown key; allowed: "
-                             + ", ".join(sorted(_LOAD_FILE_KEYS)))
-    for key in ("path", "mapping"):
-        if key not in spec:
-            raise ModelError(f"load_file.{key}", "missing")
+    _check_keys("load_file", spec, _LOAD_FILE_KEYS, ("path", "mapping"))
     if not isinstance(spec["mapping"], dict) or not spec["mapping"]:
         raise ModelError("load_file.mapping", "expected a table: load name = channel")
     path = p.parent / str(spec["path"])
@@ -232,10 +229,7 @@ def _turbine(spec: dict, wspec: dict, p: Path, t_end: float):
 
     if not isinstance(spec, dict) or "file" not in spec:
         raise ModelError("turbine.file", "missing: the turbine file (TOML)")
-    for key in spec:
-        if key not in _TURBINE_KEYS:
-            raise ModelError(f"turbine.{key}", "unknown key; allowed: "
-                             + ", ".join(sorted(_TURBINE_KEYS)))
+    _check_keys("turbine", spec, _TURBINE_KEYS)
     turbine = load_turbine(p.parent / str(spec["file"]))
     if "mounting_azimuth_deg" in spec:
         turbine.mounting_azimuth_deg = v.number("turbine.mounting_azimuth_deg",
@@ -250,10 +244,7 @@ def _turbine(spec: dict, wspec: dict, p: Path, t_end: float):
     if "aero_hold" in spec:
         opts["aero_hold"] = v.choice("turbine.aero_hold", spec["aero_hold"],
                                      ("interpolate", "hold", "linear"))
-    fields = {f for f in Wind.__dataclass_fields__}
-    for key in wspec:
-        if key not in fields:
-            raise ModelError(f"wind.{key}", "unknown key; allowed: " + ", ".join(sorted(fields)))
+    _check_keys("wind", wspec, set(Wind.__dataclass_fields__))
     wargs = {"hub_height": turbine.hub_height, "half_width": 1.1 * turbine.rotor.radius,
              "duration": t_end + 1.0, **wspec}
     return turbine, Wind(**wargs), opts

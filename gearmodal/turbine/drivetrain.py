@@ -63,7 +63,7 @@ from ..integrate.refreeze import AzimuthAssembler, QuasiStatic
 from ..integrate.system import PiecewiseLinearSystem
 from ..static import equilibrium
 from .rotor import LOAD_COLUMNS
-from .turbine import RPM, TURBINE_COLUMNS, Turbine, TurbineResult
+from .turbine import RPM, TURBINE_COLUMNS, Turbine, TurbineResult, mark_cut_in
 from .wind import Wind
 
 HOLDS = ("interpolate", "hold", "linear")
@@ -107,9 +107,7 @@ class DrivetrainResult:
         axs[1].plot(d.index, d["power_W"] / 1e3)
         axs[1].set_ylabel("electrical power [kW]")
         self.gearbox.plot(ax=axs[2])
-        if self.cut_in_time is not None:
-            for a in axs:
-                a.axvline(self.cut_in_time, color="0.6", ls="--", lw=0.8)
+        mark_cut_in(axs, self.cut_in_time)
         fig.tight_layout()
         return fig
 

@@ -86,6 +86,13 @@ class Turbine:
         return -ry, -rz
 
 
+def mark_cut_in(axs, cut_in_time: float | None) -> None:
+    """A dashed vertical line at the generator's cut-in on each of ``axs``."""
+    if cut_in_time is not None:
+        for a in axs:
+            a.axvline(cut_in_time, color="0.6", ls="--", lw=0.8)
+
+
 def load_turbine(path) -> Turbine:
     """A :class:`Turbine` from a TOML file (``studies/models/600kw_turbine.toml``)."""
     p = Path(path)
@@ -146,9 +153,7 @@ class TurbineResult:
         axs[2].set_ylabel("shaft-end force on gearbox [kN]")
         axs[2].legend(fontsize=8)
         axs[2].set_xlabel("time [s]")
-        if self.cut_in_time is not None:
-            for a in axs:
-                a.axvline(self.cut_in_time, color="0.6", ls="--", lw=0.8)
+        mark_cut_in(axs, self.cut_in_time)
         fig.tight_layout()
         return fig
 
