@@ -7,7 +7,7 @@ equilibrium minimises the convex, piecewise-quadratic energy
     Pi(q) = 1/2 q^T K q - f^T q + sum_e 1/2 k_e max(0, W_e q - offset_e)^2
 
 (``K`` the always-active stiffness plus ``Omega^2 K_cent``, ``f = B u + Omega^2 f_cent``). It is
-found by a semismooth Newton method with a backtracking line search on ``Pi``: the Newton matrix
+found by a semismooth Newton method with an exact line search on ``Pi``: the Newton matrix
 is the stiffness of the current contact state, so the method stops exactly when the state no
 longer changes (finite termination for this piecewise-quadratic problem).
 """
@@ -49,6 +49,35 @@ def free_modes(asm: Assembly, K: np.ndarray | None = None, rtol: float = 1e-9) -
     w, v = np.linalg.eigh(Hs)
     tol = rtol * max(float(np.max(np.abs(w))), 1e-300)
     return d[:, None] * v[:, np.abs(w) <= tol]
+
+
+def _line_search(r: np.ndarray, Kd: np.ndarray, p: np.ndarray, w: np.ndarray, k: np.ndarray,
+                 d: np.ndarray) -> float:
+    """Exact minimiser ``t > 0`` of the energy ``Pi(q + t d)`` along a descent direction ``d``.
+
+    ``Pi`` is convex and piecewise quadratic in ``t``: its derivative
+    ``d^T r + t d^T K d + sum_e k_e w_e max(0, p_e + t w_e)`` (``r = K q - f``, ``p`` the
+    penetrations, ``w = W d``) is piecewise linear and non-decreasing, with kinks where a
+    contact opens or closes (``t = -p_e / w_e``). The root is found interval by interval."""
+    dKd = float(d @ Kd)
+    a0 = float(d @ r)
+    kinks = np.unique(np.concatenate([[0.0], -p[w != 0] / w[w != 0]]))
+    kinks = kinks[kinks >= 0.0]
+
+    def slope(t):  # derivative and its rate on the interval that starts at t (right limits)
+        on = (p + t * w > 0) | ((p + t * w == 0) & (w > 0))
+        return a0 + t * dKd + float(np.sum(k[on] * w[on] * (p[on] + t * w[on]))), \
+            dKd + float(np.sum(k[on] * w[on] ** 2))
+
+    for j, t0 in enumerate(kinks):
+        d0, rate = slope(t0)
+        if d0 >= 0.0:
+            return float(t0) if t0 > 0 else 1.0
+        t_end = kinks[j + 1] if j + 1 < len(kinks) else np.inf
+        if rate > 0.0 and t0 - d0 / rate <= t_end:
+            return float(t0 - d0 / rate)
+    raise ModelError("loads", "no static equilibrium: the energy decreases without bound along "
+                     "a motion nothing resists")
 
 
 def _describe(asm: Assembly, mode: np.ndarray) -> str:
@@ -112,10 +141,6 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
                              "add a support")
     q = np.zeros(asm.n)
 
-    def energy(q):
-        p = np.maximum(W @ q - off, 0.0)
-        return 0.5 * q @ K @ q - f @ q + 0.5 * np.sum(k * p * p)
-
     # Work in the space orthogonal to the free modes (basis Q): the minimum-norm solution, no
     # drift along motions nothing resists. The first Newton matrix is that of the given
     # (default: nominal) state, afterwards that of the contacts active at the iterate; where it
@@ -133,12 +158,13 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
         Hr = Q.T @ (K + (W[s].T * k[s]) @ W[s]) @ Q
         dr, *_ = sla.lstsq(Hr, -g, lapack_driver="gelsy")
         if np.linalg.norm(Hr @ dr + g) > 1e-8 * max(np.linalg.norm(g), 1e-300):
-            dr = np.linalg.solve(Hr_all, -g)
+            # the state's stiffness cannot resist the residual (e.g. a planet whose flanks are
+            # all open turns freely): a weak share of the open contacts' stiffness points the
+            # step at the contacts that must close; the line search goes as far as they allow
+            Hreg = Hr + 1e-6 * (Q.T @ (W[~s].T * k[~s]) @ W[~s] @ Q)
+            dr = np.linalg.solve(Hreg if np.all(np.isfinite(Hreg)) else Hr_all, -g)
         step = Q @ dr
-        e0, t = energy(q), 1.0
-        slope = g @ dr
-        while energy(q + t * step) > e0 + 1e-4 * t * slope + 1e-14 * abs(e0) and t > 1e-12:
-            t *= 0.5
+        t = _line_search(K @ q - f, K @ step, p, W @ step, k, step)
         q = q + t * step
         p = W @ q - off
         tol = rtol * max(np.abs(W @ q).max(initial=0.0), np.abs(off).max(initial=0.0), 1e-300)
