@@ -38,6 +38,7 @@ from .model import (
 )
 from .model.toml_io import load, loads
 from .static import Equilibrium, balance, equilibrium
+from .studies import sweep
 
 __version__ = "0.1.0"
 
@@ -47,4 +48,5 @@ __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Const
            "Gear", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
            "SimulationResult", "simulate",
            "assemble", "balance", "campbell", "drivetrain", "equilibrium", "gear_pair",
-           "lin_parker_stage", "load", "loads", "modal", "parallel_stage", "planetary_stage"]
+           "lin_parker_stage", "load", "loads", "modal", "parallel_stage", "planetary_stage",
+           "sweep"]

@@ -20,3 +20,6 @@ class ModelError(ValueError):
         else:
             text = f"{field}: {message}"
         super().__init__(text)
+
+    def __reduce__(self):  # pickle by (field, message): errors cross process pools intact
+        return (type(self), (self.field, self.message))

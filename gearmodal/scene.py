@@ -128,8 +128,14 @@ def _wave(field_: str, spec: dict):
     return load, mean
 
 
-def load_scene(path) -> Scene:
-    """Read and validate a scene file; errors name the TOML field and the file."""
+def load_scene(path, overrides: dict | None = None) -> Scene:
+    """Read and validate a scene file; errors name the TOML field and the file.
+
+    ``overrides`` (``{dotted key: value}``) changes the scene before validation: keys of the
+    scene file (``"turbine.mounting_azimuth_deg"``, ``"scene.t_end"``, ``"wind.seed"``) or,
+    with the prefix ``model.``, keys of its model file (``"model.stages.0.backlash"``). This is
+    how :func:`gearmodal.sweep` makes its cases.
+    """
     p = Path(path)
     try:
         doc = tomllib.loads(p.read_text(encoding="utf-8"))
@@ -137,13 +143,18 @@ def load_scene(path) -> Scene:
         raise ModelError(str(p), "no such scene file") from None
     except tomllib.TOMLDecodeError as e:
         raise ModelError(str(p), f"TOML syntax error: {e}") from None
+    from .model.toml_io import override
+
+    overrides = dict(overrides or {})
+    model_over = {k[len("model."):]: x for k, x in overrides.items() if k.startswith("model.")}
+    doc = override(doc, {k: x for k, x in overrides.items() if not k.startswith("model.")})
     try:
-        return _scene(doc, p)
+        return _scene(doc, p, model_over)
     except ModelError as e:
         raise ModelError(e.field, f"{e.message} (in {p})") from None
 
 
-def _scene(doc: dict, p: Path) -> Scene:
+def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
     for key in doc:
         if key not in _TOP:
             raise ModelError(key, "unknown table; allowed: " + ", ".join(sorted(_TOP)))
@@ -155,7 +166,12 @@ def _scene(doc: dict, p: Path) -> Scene:
         raise ModelError("scene.model", f"= {sc['model']!r}: expected a path to a model file")
     from .model.toml_io import load
 
-    model = load(p.parent / sc["model"])
+    try:
+        model = load(p.parent / sc["model"], overrides=model_overrides)
+    except ModelError as e:
+        if e.field.startswith("overrides."):  # a sweep's model key: name it as given
+            raise ModelError("model." + e.field[len("overrides."):], e.message) from None
+        raise
     t_end = v.positive("scene.t_end", sc["t_end"], "s")
     dt = v.positive("scene.dt", sc["dt"], "s")
     method = v.choice("scene.method", sc.get("method", "exact"), ("exact", "newmark", "scipy"))

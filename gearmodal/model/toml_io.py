@@ -251,8 +251,13 @@ _SECTIONS = {
 
 
 # -- public API -----------------------------------------------------------------------------
-def load(path) -> Model:
+def load(path, overrides: dict | None = None) -> Model:
     """Load and validate a model from the TOML file ``path``.
+
+    ``overrides`` replaces values of the file before validation, by dotted key:
+    ``{"stages.0.backlash": 2e-4, "stages.0.carrier_bearing": {"stiffness": {...}}}`` (an
+    integer picks an element of an array of tables). Parameter studies use it
+    (:func:`gearmodal.sweep`).
 
     Raises :class:`~gearmodal.errors.ModelError` naming the TOML field (and the file) for
     any invalid input, including TOML syntax errors.
@@ -272,10 +277,46 @@ def load(path) -> Model:
     except UnicodeDecodeError as e:
         raise ModelError(str(p), f"not a UTF-8 text file ({e.reason} at byte {e.start})") \
             from None
-    return loads(text, source=str(p), default_name=p.stem)
+    return loads(text, source=str(p), default_name=p.stem, overrides=overrides)
 
 
-def loads(text: str, source: str = "<string>", *, default_name: str | None = None) -> Model:
+def override(doc: dict, overrides: dict | None, label: str = "overrides") -> dict:
+    """A copy of the TOML document ``doc`` with ``overrides`` (``{dotted key: value}``)
+    applied. Every table on the way to a key must exist (a misspelt one raises a
+    :class:`ModelError` naming the key); the last key may be new.
+
+    >>> override({"a": {"b": 1}, "s": [{"k": 1}]}, {"a.b": 2, "s.0.k": 3})
+    {'a': {'b': 2}, 's': [{'k': 3}]}
+    """
+    import copy
+
+    out = copy.deepcopy(doc)
+    for key, value in (overrides or {}).items():
+        parts = str(key).split(".")
+        node = out
+        for i, part in enumerate(parts):
+            where = ".".join(parts[: i + 1])
+            last = i == len(parts) - 1
+            if isinstance(node, list):
+                if not part.isdigit() or int(part) >= len(node):
+                    raise ModelError(f"{label}.{key}", f"{where}: expected an index below "
+                                     f"{len(node)} into the array")
+                part = int(part)
+            elif not isinstance(node, dict):
+                raise ModelError(f"{label}.{key}", f"{'.'.join(parts[:i])} is a value, not a "
+                                 "table")
+            elif not last and part not in node:
+                raise ModelError(f"{label}.{key}", f"no table {where!r}; it has: "
+                                 + ", ".join(map(str, node)))
+            if last:
+                node[part] = copy.deepcopy(value)
+            else:
+                node = node[part]
+    return out
+
+
+def loads(text: str, source: str = "<string>", *, default_name: str | None = None,
+          overrides: dict | None = None) -> Model:
     """Load and validate a model from TOML ``text``; ``source`` names it in error messages.
 
     Examples
@@ -309,6 +350,7 @@ def loads(text: str, source: str = "<string>", *, default_name: str | None = Non
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ModelError(source, _syntax_message(e)) from None
+    doc = override(doc, overrides)
     try:
         return _build(doc, default_name)
     except ModelError as e:

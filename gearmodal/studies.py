@@ -1,0 +1,369 @@
+"""Parameter studies: run many cases of a scene on any ``concurrent.futures.Executor``, store each
+case as it finishes and resume after an interruption (DESIGN 5, ``studies.py``).
+
+A case is a set of overrides of a scene file (:func:`gearmodal.scene.load_scene`): keys of the
+scene (``"turbine.mounting_azimuth_deg"``, ``"wind.seed"``, ``"scene.t_end"``) or, with the
+prefix ``model.``, of its model file (``"model.stages.0.carrier_bearing"``). The scene may also
+be any picklable callable ``scene(**case)`` returning a result.
+
+Store layout (``store=DIR``)::
+
+    DIR/sweep.json                 the scene, its files' SHA-256, the cases
+    DIR/cases/<case_id>/row.parquet     one row: the case's scalar results
+    DIR/cases/<case_id>/<table>.parquet tables the metrics returned (events, forces, ...)
+
+A case directory is written under a temporary name and renamed when complete, so a sweep
+killed at any moment leaves only whole cases; started again with the same arguments it loads
+them and runs only the others.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import hashlib
+import json
+import math
+import os
+import shutil
+import time
+import uuid
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .errors import ModelError
+
+__all__ = ["load_table", "summarize", "sweep"]
+
+#: Columns of :func:`summarize` (the double-contact study's ``summary.csv``).
+SUMMARY_COLUMNS = ["max_front_force_N", "max_back_force_N", "max_front_force_sun_planet_N",
+                   "max_back_force_sun_planet_N", "max_front_force_ring_planet_N",
+                   "max_back_force_ring_planet_N", "double_contact_time_s",
+                   "double_contact_two_planets_time_s", "max_planet_bearing_force_N",
+                   "peak_load_sharing_factor", "n_events"]
+
+
+# -- what a case reports ----------------------------------------------------------------------
+def _union_length(intervals: Iterable[tuple[float, float]]) -> float:
+    """Total length of a union of intervals (s)."""
+    total, end = 0.0, -math.inf
+    for a, b in sorted(intervals):
+        if b <= end:
+            continue
+        total += b - max(a, end)
+        end = b
+    return total
+
+
+def summarize(result, *, planet: str = "planet1", tables: bool = False,
+              loaded_fraction: float = 0.1) -> dict:
+    """The quantities of the paper's double-contact study for one simulation.
+
+    ``result`` is a :class:`~gearmodal.SimulationResult` or a turbine run's
+    :class:`~gearmodal.turbine.DrivetrainResult`. Forces are N and are the maxima over the
+    output times of the first planetary stage:
+
+    - ``max_front_force_N`` / ``max_back_force_N``: the largest front / back flank force of
+      ``planet`` on its sun-planet and ring-planet meshes (also given per mesh:
+      ``max_front_force_sun_planet_N``, ...);
+    - ``double_contact_time_s``: time during which at least one mesh of the stage has both
+      flanks in contact (from the exact event times); ``double_contact_two_planets_time_s``:
+      time with double contact on two or more planets at once;
+    - ``max_planet_bearing_force_N``: the largest radial planet-bearing force
+      ``sqrt(F_x^2 + F_y^2)`` of any planet;
+    - ``peak_load_sharing_factor``: the largest ``N_planets * max share`` of the sun-planet
+      load (:meth:`~gearmodal.SimulationResult.load_sharing`) over the times at which the
+      stage carries at least ``loaded_fraction`` of its largest total load (shares of a
+      nearly unloaded, rattling stage are meaningless);
+    - ``n_events``; for a turbine run also ``cut_in_time_s`` and ``mean_power_W`` (after
+      cut-in).
+
+    With ``tables=True`` the dict also holds ``"tables"``: ``events`` (the event log) and
+    ``forces`` (planet flank and bearing forces and the load-sharing factor against time), as
+    stored by :func:`sweep`.
+    """
+    sim = getattr(result, "gearbox", result)
+    f = sim.forces
+    meshes = {kind: [c[:-len(".front")] for c in f.columns
+                     if c.endswith(f"{kind}_{planet}.front")] for kind in ("sun", "ring")}
+    if not meshes["sun"] or not meshes["ring"]:
+        raise ModelError("planet", f"= {planet!r}: the result has no sun-planet and ring-planet "
+                         "meshes of that planet")
+    stage = meshes["sun"][0].rsplit(".", 1)[0] + "." if "." in meshes["sun"][0] else ""
+    out: dict = {}
+    for kind in ("sun", "ring"):
+        m = meshes[kind][0]
+        out[f"max_front_force_{kind}_planet_N"] = float(f[f"{m}.front"].max())
+        out[f"max_back_force_{kind}_planet_N"] = float(f[f"{m}.back"].max())
+    out["max_front_force_N"] = max(out["max_front_force_sun_planet_N"],
+                                   out["max_front_force_ring_planet_N"])
+    out["max_back_force_N"] = max(out["max_back_force_sun_planet_N"],
+                                  out["max_back_force_ring_planet_N"])
+    dc = sim.double_contact()
+    in_stage = dc.mesh.str.startswith(stage) if stage else np.ones(len(dc), bool)
+    single = dc[in_stage & (dc.n_planets == 1)]
+    multi = dc[in_stage & (dc.n_planets >= 2)]
+    out["double_contact_time_s"] = _union_length(zip(single.start, single.end, strict=True))
+    out["double_contact_two_planets_time_s"] = _union_length(zip(multi.start, multi.end,
+                                                                 strict=True))
+    bearings = sorted({c.rsplit(".", 1)[0] for c in f.columns
+                       if c.startswith(f"{stage}planet") and "_bearing." in c})
+    radial = pd.DataFrame({b: np.hypot(f[f"{b}.x"], f[f"{b}.y"]) for b in bearings},
+                          index=f.index)
+    out["max_planet_bearing_force_N"] = float(radial.to_numpy().max()) if bearings else math.nan
+    ls = sim.load_sharing()
+    fac = ls[f"{stage}factor"] if f"{stage}factor" in ls else ls.filter(like="factor").iloc[:, 0]
+    sp = [c for c in f.columns if c.startswith(f"{stage}sun_planet") and c.endswith(".front")]
+    total = sum(f[c] - f[c[:-len("front")] + "back"] for c in sp)
+    loaded = np.abs(total) >= loaded_fraction * float(np.abs(total).max())
+    out["peak_load_sharing_factor"] = float(fac[loaded].max())
+    out["n_events"] = int(len(sim.events))
+    if hasattr(result, "turbine"):
+        cut = result.cut_in_time
+        out["cut_in_time_s"] = float(cut) if cut is not None else math.nan
+        ld = result.turbine.loads
+        out["mean_power_W"] = float(ld.loc[ld.index >= cut, "power_W"].mean()) \
+            if cut is not None else 0.0
+    if tables:
+        cols = [f"{m}.{side}" for k in ("sun", "ring") for m in meshes[k]
+                for side in ("front", "back")]
+        forces = f[cols].copy()
+        for b in bearings:
+            forces[f"{b}.radial"] = radial[b]
+        forces["load_sharing_factor"] = fac
+        forces.index.name = "time"
+        out["tables"] = {"events": sim.events.copy(), "forces": forces}
+    return out
+
+
+# -- cases --------------------------------------------------------------------------------------
+def _cases(parameters) -> tuple[list, list[dict]]:
+    """(labels, cases) from a dict of value lists (full grid), a DataFrame (one case per
+    row, index = labels) or a list of dicts."""
+    if isinstance(parameters, pd.DataFrame):
+        # a missing value (NaN, None) leaves that key of the scene as it is
+        rows = [{k: _plain(v) for k, v in r.items() if not _missing(v)}
+                for r in parameters.to_dict("records")]
+        return list(parameters.index), rows
+    if isinstance(parameters, dict):
+        if not parameters:
+            return [0], [{}]
+        keys = list(parameters)
+        for k in keys:
+            vals = parameters[k]
+            if isinstance(vals, (str, bytes)) or not isinstance(vals, Iterable):
+                raise ModelError(f"parameters.{k}", f"= {vals!r}: expected a list of values")
+        grids = np.meshgrid(*[np.arange(len(list(parameters[k]))) for k in keys], indexing="ij")
+        lists = [list(parameters[k]) for k in keys]
+        cases = [{k: _plain(lists[j][int(g.flat[i])]) for j, (k, g) in
+                  enumerate(zip(keys, grids, strict=True))} for i in range(grids[0].size)]
+        return list(range(len(cases))), cases
+    if isinstance(parameters, Iterable):
+        cases = [dict(c) for c in parameters]
+        return list(range(len(cases))), [{k: _plain(v) for k, v in c.items()} for c in cases]
+    raise ModelError("parameters", f"expected a dict of value lists, a DataFrame or a list of "
+                     f"dicts, got {type(parameters).__name__}")
+
+
+def _missing(v) -> bool:
+    return v is None or (isinstance(v, float) and math.isnan(v))
+
+
+def _plain(v):
+    """numpy scalars as Python numbers (for JSON, TOML-like overrides and hashing)."""
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, dict):
+        return {k: _plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_plain(x) for x in v]
+    return v
+
+
+def _case_id(case: dict) -> str:
+    text = json.dumps(case, sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _scene_identity(scene) -> dict:
+    """What identifies the scene in ``sweep.json``: the file and its model file's SHA-256, or
+    the callable's qualified name."""
+    if callable(scene):
+        return {"callable": f"{getattr(scene, '__module__', '?')}."
+                            f"{getattr(scene, '__qualname__', repr(scene))}"}
+    import tomllib
+
+    p = Path(scene)
+    if not p.is_file():
+        raise ModelError("scene", f"= {str(scene)!r}: no such scene file")
+    ident = {"scene": str(p.resolve()), "scene_sha256": hashlib.sha256(p.read_bytes()).hexdigest()}
+    try:
+        model = p.parent / tomllib.loads(p.read_text(encoding="utf-8"))["scene"]["model"]
+        ident["model_sha256"] = hashlib.sha256(Path(model).read_bytes()).hexdigest()
+    except (KeyError, OSError, tomllib.TOMLDecodeError):
+        pass  # load_scene will name the problem
+    return ident
+
+
+def _run_case(scene, case: dict, metrics: Callable, blas_threads: int | None) -> tuple:
+    """Run one case in a worker: (row, tables, cpu_s)."""
+    from contextlib import nullcontext
+
+    try:
+        from threadpoolctl import threadpool_limits
+        limit = threadpool_limits(blas_threads) if blas_threads else nullcontext()
+    except ImportError:  # pragma: no cover - threadpoolctl is a dependency
+        limit = nullcontext()
+    t0 = time.process_time()
+    with limit:
+        if callable(scene):
+            result = scene(**case)
+        else:
+            from .scene import load_scene
+
+            result = load_scene(scene, overrides=case).simulate()
+        row = dict(metrics(result))
+    tables = row.pop("tables", {}) or {}
+    return row, tables, time.process_time() - t0
+
+
+def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict) -> None:
+    """Write a case atomically: a temporary directory renamed into place when complete."""
+    final = root / cid
+    tmp = root / f".tmp-{cid}-{uuid.uuid4().hex[:8]}"
+    tmp.mkdir(parents=True)
+    try:
+        frame = pd.DataFrame([{**row, "case_id": cid,
+                               "parameters_json": json.dumps(case, sort_keys=True,
+                                                             default=repr)}])
+        frame.to_parquet(tmp / "row.parquet")
+        for name, df in tables.items():
+            df.to_parquet(tmp / f"{name}.parquet")
+        try:
+            os.rename(tmp, final)
+        except OSError:
+            if not (final / "row.parquet").exists():
+                raise
+            # another run finished the same case first: keep its copy
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def load_table(store, case_id: str, name: str) -> pd.DataFrame:
+    """A table a case stored (e.g. ``"events"``, ``"forces"``) by its ``case_id`` (a column of
+    the DataFrame :func:`sweep` returns)."""
+    path = Path(store) / "cases" / str(case_id) / f"{name}.parquet"
+    if not path.exists():
+        have = sorted(p.stem for p in path.parent.glob("*.parquet")) if path.parent.exists() \
+            else []
+        raise ModelError("name", f"= {name!r}: case {case_id} has no such table"
+                         + (f"; it has: {', '.join(have)}" if have else ""))
+    return pd.read_parquet(path)
+
+
+# -- the sweep ----------------------------------------------------------------------------------
+def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
+          metrics: Callable | None = None, progress: bool = True, max_workers: int | None = None,
+          blas_threads: int | None = 1, errors: str = "raise") -> pd.DataFrame:
+    """Run every case of a parameter study and return one row per case.
+
+    Parameters
+    ----------
+    scene : path of a scene file (each case is ``load_scene(scene, overrides=case)
+        .simulate()``), or a picklable callable ``scene(**case)`` returning a result.
+    parameters : ``{key: [values]}`` (the full grid, first key slowest), a DataFrame (one
+        case per row; its index labels the rows returned; NaN/None leaves a key as the scene
+        has it) or a list of dicts. Keys are scene
+        keys (``"turbine.mounting_azimuth_deg"``) or model keys with the prefix ``model.``
+        (``"model.stages.0.backlash"``); values may be tables (dicts).
+    executor : any ``concurrent.futures.Executor`` (e.g. a Dask ``client.get_executor()`` for
+        a cluster). Default: a local process pool with ``max_workers`` (default: the CPU
+        count) processes, shut down at the end.
+    store : directory. Each case is written there when it finishes (atomically, Parquet); a
+        sweep started again with the same scene and store loads the finished cases and runs
+        only the others. The store refuses a different scene (its files' SHA-256 differ).
+    metrics : ``metrics(result) -> dict`` of scalars, optionally with ``"tables"``: a dict of
+        DataFrames stored per case (:func:`load_table`). Default :func:`summarize`.
+        Must be picklable (a module-level function or a ``functools.partial`` of one).
+    progress : a tqdm progress bar on stderr.
+    blas_threads : BLAS threads per case (1: parallel cases do not oversubscribe the cores;
+        None leaves the setting alone).
+    errors : ``"raise"`` (default; finished cases stay stored) or ``"record"`` (the message
+        goes into the ``error`` column and the case is not stored, so a resume retries it).
+
+    Returns
+    -------
+    DataFrame indexed like the cases, with the parameter columns, the metrics, ``case_id``,
+    ``cpu_s`` (the case's CPU time in its worker) and ``cached`` (loaded from the store).
+    ``.attrs["store"]`` holds the store path.
+    """
+    if errors not in ("raise", "record"):
+        raise ModelError("errors", f"= {errors!r}: must be 'raise' or 'record'")
+    metrics = summarize if metrics is None else metrics
+    labels, cases = _cases(parameters)
+    ids = [_case_id(c) for c in cases]
+    if len(set(ids)) != len(ids):
+        raise ModelError("parameters", "two cases are identical")
+    root = None
+    ident = _scene_identity(scene)
+    if store is not None:
+        root = Path(store) / "cases"
+        root.mkdir(parents=True, exist_ok=True)
+        meta_path = Path(store) / "sweep.json"
+        if meta_path.exists():
+            old = json.loads(meta_path.read_text())
+            for key in ("scene_sha256", "model_sha256", "callable"):
+                if old.get("identity", {}).get(key) != ident.get(key):
+                    raise ModelError("store", f"= {str(store)!r} was made with a different "
+                                     f"scene ({key} differs): use a new store or delete it")
+        meta = {"identity": ident, "cases": [{"case_id": i, **c} for i, c in
+                                             zip(ids, cases, strict=True)]}
+        meta_path.write_text(json.dumps(meta, indent=1, default=repr))
+    rows: dict[str, dict] = {}
+    for cid in ids:
+        if root is not None and (root / cid / "row.parquet").exists():
+            r = pd.read_parquet(root / cid / "row.parquet").iloc[0].to_dict()
+            r.pop("parameters_json", None)
+            rows[cid] = {**r, "cached": True}
+    todo = [(cid, c) for cid, c in zip(ids, cases, strict=True) if cid not in rows]
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=len(cases), initial=len(cases) - len(todo), disable=not progress,
+               desc="sweep", unit="case")
+    own = executor is None and todo
+    if own:
+        executor = cf.ProcessPoolExecutor(max_workers=min(max_workers or os.cpu_count() or 1,
+                                                          len(todo)))
+    try:
+        futures = {executor.submit(_run_case, scene, c, metrics, blas_threads): (cid, c)
+                   for cid, c in todo}
+        for fut in cf.as_completed(futures):
+            cid, c = futures[fut]
+            try:
+                row, tables, cpu = fut.result()
+            except Exception as err:
+                if errors == "raise":
+                    for f in futures:
+                        f.cancel()
+                    raise
+                rows[cid] = {"error": f"{type(err).__name__}: {err}", "cached": False}
+            else:
+                row["cpu_s"] = cpu
+                if root is not None:
+                    _write_case(root, cid, c, row, tables)
+                rows[cid] = {**row, "case_id": cid, "cached": False}
+            bar.update(1)
+    finally:
+        bar.close()
+        if own:
+            executor.shutdown(wait=True, cancel_futures=True)
+    params = pd.DataFrame(cases, index=labels)
+    res = pd.DataFrame([{**rows[cid], "case_id": cid} for cid in ids], index=labels)
+    out = pd.concat([params, res.drop(columns=[c for c in params.columns if c in res])], axis=1)
+    if isinstance(parameters, pd.DataFrame):
+        out.index.name = parameters.index.name
+    out.attrs["store"] = str(store) if store is not None else None
+    return out
