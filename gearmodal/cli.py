@@ -1,6 +1,7 @@
 """Command line: ``gearmodal campbell|modal|info MODEL.toml``, ``gearmodal simulate SCENE.toml``
 (a gearbox scene with loads, loads from an aeroelastic output file, or the turbine in wind
-with the gearbox: see :mod:`gearmodal.scene`).
+with the gearbox: see :mod:`gearmodal.scene`), ``gearmodal study NAME --out DIR`` (the
+paper's studies in ``studies/``).
 
 Input errors (:class:`gearmodal.ModelError`, missing files) are printed as one line without a
 traceback and the exit status is 2.
@@ -149,6 +150,55 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+STUDIES = ("double-contact", "gravity-torque", "mounting-azimuth", "clearance-map")
+
+
+def _study_module(name: str, folder: str | None):
+    """The study script ``studies/<name>.py`` of the source tree (or ``--studies DIR``,
+    or the environment variable GEARMODAL_STUDIES), imported as a module."""
+    import importlib.util
+    import os
+    from pathlib import Path
+
+    base = Path(folder or os.environ.get("GEARMODAL_STUDIES")
+                or Path(__file__).resolve().parents[1] / "studies")
+    path = base / f"{name.replace('-', '_')}.py"
+    if not path.is_file():
+        raise ModelError("--studies", f"= {str(base)!r}: no study script {path.name} there "
+                         "(the studies live in the source tree's studies/ folder)")
+    mod_name = f"gearmodal_study_{name.replace('-', '_')}"
+    spec = importlib.util.spec_from_file_location(mod_name, path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[mod_name] = mod  # picklable by reference in forked workers
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def cmd_study(args) -> int:
+    import inspect
+
+    mod = _study_module(args.study, args.studies)
+    params = inspect.signature(mod.run).parameters
+    given = {"duration": args.duration, "seed": args.seed, "step_deg": args.step,
+             "max_workers": args.workers}
+    flags = {"duration": "--duration", "seed": "--seed", "step_deg": "--step",
+             "max_workers": "--workers"}
+    kwargs = {"progress": not args.quiet}
+    for key, value in given.items():
+        if value is None:
+            continue
+        if key not in params:
+            raise ModelError(flags[key], f"the {args.study} study does not take it")
+        if key in ("duration", "step_deg") and not value > 0:
+            raise ModelError(flags[key], f"= {value!r}: must be > 0")
+        kwargs[key] = value
+    summary = mod.run(args.out, **kwargs)
+    with __import__("pandas").option_context("display.width", 160, "display.max_columns", 8):
+        print(summary)
+    print(f"wrote {args.out}/summary.csv and report.html")
+    return 0
+
+
 def cmd_info(args) -> int:
     model = _load(args.model)
     print(model.summary())
@@ -186,6 +236,21 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--t-end", type=float, dest="t_end", help="override the end time, s")
     sm.add_argument("--quiet", action="store_true", help="no progress bar")
     sm.set_defaults(func=cmd_simulate)
+    st = sub.add_parser("study", help="run one of the paper's studies (studies/*.py): "
+                        + ", ".join(STUDIES))
+    st.add_argument("study", choices=STUDIES)
+    st.add_argument("--out", required=True, help="output folder (its store/ makes a rerun "
+                    "resume)")
+    st.add_argument("--duration", type=float, help="simulated time per case, s (turbine "
+                    "studies: default 30 s, the paper's start-up, cut-in and operation)")
+    st.add_argument("--seed", type=int, help="turbulence seed (default 1)")
+    st.add_argument("--step", type=float, help="azimuth step, deg (gravity-torque, "
+                    "mounting-azimuth)")
+    st.add_argument("--workers", type=int, help="parallel processes (default: CPU count)")
+    st.add_argument("--studies", help="folder of the study scripts (default: the source "
+                    "tree's studies/)")
+    st.add_argument("--quiet", action="store_true", help="no progress bar")
+    st.set_defaults(func=cmd_study)
     i = sub.add_parser("info", help="model summary and DOF names")
     i.add_argument("model")
     i.set_defaults(func=cmd_info)

@@ -64,7 +64,7 @@ def figure(summary: pd.DataFrame):
 
 
 def run(out, *, duration: float | None = None, clearances=CLEARANCES, backlashes=BACKLASHES,
-        executor=None, progress: bool = True, max_workers: int | None = None, **_):
+        executor=None, progress: bool = True, max_workers: int | None = None):
     """Run the grid (stored in ``out/store``, resumable); returns the summary."""
     out = Path(out)
     res = gm.sweep(SCENE, cases(clearances, backlashes, duration), executor,

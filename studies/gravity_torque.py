@@ -95,7 +95,7 @@ def figure(table: pd.DataFrame):
 
 
 def run(out, *, step_deg: float = 2.0, torque_fractions=(0.05, 0.1, 0.25, 0.5, 1.0),
-        progress: bool = True, **_) -> pd.DataFrame:
+        progress: bool = True) -> pd.DataFrame:
     """Both gearboxes over one revolution; writes gravity_torque.csv, summary.csv,
     factor_by_torque.csv, planet_forces.png and report.html. Returns the summary (one row per
     case, at rated torque)."""

@@ -1,0 +1,221 @@
+"""Parameter sweeps (gm.sweep: grid, store, resume after a kill, Dask) and the paper's studies
+in shortened form (studies/*.py through the CLI)."""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import gearmodal as gm
+from gearmodal.cli import _study_module, main
+from gearmodal.scene import load_scene
+from gearmodal.studies import summarize
+
+ROOT = Path(__file__).resolve().parents[1]
+STAGE = str(ROOT / "studies" / "scenes" / "planetary_double_contact.toml")
+
+
+def test_grid_and_table_cases_give_the_scene_with_their_overrides(tmp_path):
+    grid = gm.sweep(STAGE, {"model.planetary_stage.backlash": [1e-4, 3e-4],
+                            "scene.t_end": [0.01, 0.02]},
+                    executor=ThreadPoolExecutor(2),
+                    store=tmp_path, progress=False)
+    assert grid["model.planetary_stage.backlash"].tolist() == [1e-4, 1e-4, 3e-4, 3e-4]
+    assert grid["scene.t_end"].tolist() == [0.01, 0.02, 0.01, 0.02]
+    # each row is the scene run with its overrides, the same as running it by hand
+    one = load_scene(STAGE, {"model.planetary_stage.backlash": 3e-4,
+                                      "scene.t_end": 0.02}).simulate()
+    ref = summarize(one)
+    for key in ("max_front_force_N", "max_planet_bearing_force_N", "double_contact_time_s"):
+        assert grid.loc[3, key] == pytest.approx(ref[key], rel=1e-12, abs=1e-12)
+    assert grid.loc[3, "n_events"] == ref["n_events"]
+    # a DataFrame of cases keeps its labels; NaN leaves the scene's value
+    cases = pd.DataFrame({"scene.t_end": [0.01, 0.02],
+                          "model.planetary_stage.backlash": [np.nan, 3e-4]},
+                         index=pd.Index(["scene_backlash", "b03"], name="case"))
+    res = gm.sweep(STAGE, cases, executor=ThreadPoolExecutor(1), progress=False)
+    assert list(res.index) == ["scene_backlash", "b03"]
+    assert res.loc["b03", "n_events"] == grid.loc[3, "n_events"]
+    assert res.loc["scene_backlash", "n_events"] == grid.loc[2, "n_events"]  # scene: 3e-4
+
+
+def test_bad_input_is_named_and_a_store_refuses_another_scene(tmp_path):
+    with pytest.raises(gm.ModelError, match=r"model\.planetary_stagez\.backlash: no table"):
+        gm.sweep(STAGE, {"model.planetary_stagez.backlash": [1e-4]}, executor=None,
+                 progress=False, max_workers=1)
+    with pytest.raises(gm.ModelError, match=r"parameters\.scene\.t_end.*list of values"):
+        gm.sweep(STAGE, {"scene.t_end": 0.1}, progress=False)
+    rec = gm.sweep(STAGE, [{"scene.t_end": 0.01}, {"scene.t_end": -1.0}], progress=False,
+                   errors="record", store=tmp_path, max_workers=1)
+    assert rec.loc[0, "n_events"] >= 0 and not isinstance(rec.loc[0, "error"], str)
+    assert "scene.t_end" in rec.loc[1, "error"] and "> 0" in rec.loc[1, "error"]
+    assert len(list((tmp_path / "cases").iterdir())) == 1  # the failed case is not stored
+    other = ROOT / "studies" / "scenes" / "gear_rattle.toml"
+    with pytest.raises(gm.ModelError, match="store.*different scene"):
+        gm.sweep(other, {"scene.t_end": [0.01]}, store=tmp_path, progress=False)
+
+
+def test_a_sweep_killed_mid_run_resumes_with_only_the_unfinished_cases(tmp_path):
+    store = tmp_path / "store"
+    times = [0.02 + 0.01 * i for i in range(8)]
+    script = tmp_path / "run.py"
+    script.write_text(textwrap.dedent(f"""
+        import concurrent.futures as cf
+        import gearmodal as gm
+        gm.sweep({STAGE!r}, {{"scene.t_end": {times!r}}},
+                 executor=cf.ProcessPoolExecutor(1), store={str(store)!r}, progress=False)
+    """))
+    proc = subprocess.Popen([sys.executable, str(script)], start_new_session=True)
+    cases = store / "cases"
+    deadline = time.time() + 120
+    try:
+        while time.time() < deadline and proc.poll() is None:
+            done = [p for p in cases.glob("*") if not p.name.startswith(".")] \
+                if cases.exists() else []
+            if len(done) >= 2:
+                break
+            time.sleep(0.01)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its worker, without warning
+        proc.wait()
+    finished = {p.name: (p / "row.parquet").stat().st_mtime_ns
+                for p in cases.glob("*") if not p.name.startswith(".")}
+    assert 2 <= len(finished) < len(times), "the kill must land mid-run"
+    # every stored case is whole (it was renamed into place only when complete)
+    for name in finished:
+        assert (cases / name / "row.parquet").exists()
+    res = gm.sweep(STAGE, {"scene.t_end": times}, store=store, progress=False, max_workers=2)
+    assert set(res.case_id[res.cached]) == set(finished)
+    assert int((~res.cached).sum()) == len(times) - len(finished)
+    for name, mtime in finished.items():  # not redone
+        assert (cases / name / "row.parquet").stat().st_mtime_ns == mtime
+    # a third start runs nothing, and the results are those of a fresh run
+    again = gm.sweep(STAGE, {"scene.t_end": times}, store=store, progress=False)
+    assert again.cached.all()
+    np.testing.assert_array_equal(again.n_events, res.n_events)
+    fresh = summarize(load_scene(STAGE, {"scene.t_end": times[-1]}).simulate())
+    assert again.iloc[-1].max_front_force_N == pytest.approx(fresh["max_front_force_N"],
+                                                             rel=1e-12)
+
+
+def test_dask_local_cluster_runs_the_sweep(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        res = gm.sweep(STAGE, {"model.planetary_stage.backlash": [1e-4, 3e-4],
+                               "scene.t_end": [0.02]}, executor=client.get_executor(),
+                       store=tmp_path, progress=False)
+    local = gm.sweep(STAGE, {"model.planetary_stage.backlash": [1e-4, 3e-4],
+                             "scene.t_end": [0.02]}, progress=False, max_workers=1)
+    np.testing.assert_array_equal(res.n_events, local.n_events)
+    np.testing.assert_allclose(res.max_planet_bearing_force_N, local.max_planet_bearing_force_N,
+                               rtol=1e-12)
+    assert len(list((tmp_path / "cases").iterdir())) == 2
+
+
+def test_summarize_double_contact_time_matches_the_sampled_contact_state():
+    """Independent check of the exact-time episode bookkeeping: the fraction of output times
+    with both flanks of a mesh closed approaches the double-contact time."""
+    sim = load_scene(STAGE, {"scene.t_end": 0.1}).simulate()
+    s = summarize(sim, tables=True)
+    cs = sim.contact_state
+    both = np.zeros(len(cs), bool)
+    for m in {c.rsplit(":", 1)[0] for c in cs.columns if "planet" in c}:
+        if f"{m}:front" in cs and f"{m}:back" in cs:
+            both |= cs[f"{m}:front"].to_numpy() & cs[f"{m}:back"].to_numpy()
+    dt = float(np.diff(sim.t).mean())
+    sampled = both[:-1].sum() * dt
+    # each episode's two ends are each off by less than one dt on the sampled grid
+    n_ep = len(sim.double_contact())
+    assert s["double_contact_time_s"] > 0.01
+    assert abs(s["double_contact_time_s"] - sampled) <= 2 * dt * n_ep
+    # the planet-bearing peak is the largest radial force of the planet bearings
+    f = sim.forces
+    peak = max(np.hypot(f[f"planet{i}_bearing.x"], f[f"planet{i}_bearing.y"]).max()
+               for i in (1, 2, 3))
+    assert s["max_planet_bearing_force_N"] == pytest.approx(peak, rel=1e-12)
+    assert set(s["tables"]) == {"events", "forces"}
+    assert len(s["tables"]["events"]) == s["n_events"]
+
+
+def test_study_double_contact_shortened(tmp_path, capsys):
+    out = tmp_path / "dc"
+    assert main(["study", "double-contact", "--duration", "0.6", "--out", str(out),
+                 "--quiet"]) == 0
+    s = pd.read_csv(out / "summary.csv", index_col="case")
+    assert list(s.index) == ["reference", "clearance", "clearance_rot60"]
+    for col in ("max_front_force_N", "max_back_force_N", "double_contact_time_s",
+                "double_contact_two_planets_time_s", "max_planet_bearing_force_N",
+                "peak_load_sharing_factor"):
+        assert col in s
+    # the paper's Figure 6: no back-flank force without clearance; Figure 7: double contact
+    assert s.loc["reference", "double_contact_time_s"] == 0
+    assert s.loc["clearance", "double_contact_time_s"] > 0
+    for case in s.index:
+        ev = pd.read_csv(out / f"events_{case}.csv")
+        assert len(ev) == s.loc[case, "n_events"]
+        assert (out / f"tooth_forces_{case}.png").stat().st_size > 10_000
+    html = __import__("html").unescape((out / "report.html").read_text())
+    assert "The paper's claims" in html and html.count("<li><b>") == 6
+    # the rerun resumes from the store: nothing is recomputed
+    t0 = time.process_time()
+    main(["study", "double-contact", "--duration", "0.6", "--out", str(out), "--quiet"])
+    assert time.process_time() - t0 < 5.0
+
+
+def test_study_gravity_torque_planet_bearing_load_is_the_torque_share(tmp_path):
+    out = tmp_path / "gt"
+    assert main(["study", "gravity-torque", "--step", "30", "--out", str(out), "--quiet"]) == 0
+    table = pd.read_csv(out / "gravity_torque.csv")
+    s = pd.read_csv(out / "summary.csv", index_col="case")
+    # without clearance each planet bearing carries the carrier torque's share T / (3 r_c)
+    # (r_c = m_n (z_s + z_p) / (2 cos beta)), modulated by the radial loads over a turn
+    r_c = 0.010 * (21 + 39) / (2 * math.cos(math.radians(7.5)))
+    share = 2.6e5 / (3 * r_c)
+    without = table[table.case == "without"].bearing_force_N
+    assert without.mean() == pytest.approx(share, rel=0.01)
+    assert s.loc["without", "double_contact_fraction"] == 0
+    assert s.loc["with", "double_contact_fraction"] > 0
+    assert s.loc["with", "load_increase_factor"] > 1.0
+    f = pd.read_csv(out / "factor_by_torque.csv", index_col="torque_fraction")
+    assert f.load_increase_factor.is_monotonic_decreasing  # radial load matters less
+
+
+def test_study_mounting_azimuth_120_deg_is_0_deg_again(tmp_path):
+    """Three blades and three planets: mounting the rotor 120 deg further is the same
+    drivetrain with the planets renumbered, so the stage-wide results repeat."""
+    out = tmp_path / "ma"
+    assert main(["study", "mounting-azimuth", "--duration", "0.3", "--step", "60", "--out",
+                 str(out), "--quiet"]) == 0
+    s = pd.read_csv(out / "summary.csv", index_col="azimuth_deg")
+    assert list(s.index) == [0.0, 60.0, 120.0]
+    for col in ("max_planet_bearing_force_N", "double_contact_time_s"):
+        assert s.loc[120.0, col] == pytest.approx(s.loc[0.0, col], rel=1e-6, abs=1e-9)
+    assert "Best mounting" in (out / "report.html").read_text()
+
+
+def test_study_clearance_map_double_contact_needs_clearance_beyond_backlash(tmp_path):
+    mod = _study_module("clearance-map", None)
+    s = mod.run(tmp_path / "cm", duration=0.1, clearances=(0.0, 1e-3),
+                backlashes=(1e-4, 5e-4), progress=False, max_workers=2)
+    dc = s.set_index(["clearance_m", "backlash_m"]).double_contact_time_s
+    assert dc[(0.0, 5e-4)] == 0  # stiff bearing, no clearance, wide backlash
+    assert dc[(1e-3, 1e-4)] > 0  # clearance ten times the backlash
+    assert (tmp_path / "cm" / "clearance_map.png").exists()
+
+
+def test_study_cli_errors_are_one_line(capsys):
+    assert main(["study", "gravity-torque", "--seed", "2", "--out", "/tmp/x"]) == 2
+    assert "--seed: the gravity-torque study does not take it" in capsys.readouterr().err
