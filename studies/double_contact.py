@@ -65,6 +65,10 @@ def _verdicts(s: pd.DataFrame) -> list[str]:
         f"double contact {clr.double_contact_time_s:.2f} s, on two planets at once "
         f"{clr.double_contact_two_planets_time_s:.2f} s; back-flank max "
         f"{clr.max_back_force_N / 1e3:.0f} kN")
+    say(clr.double_contact_two_planets_time_s > 0,
+        "double contact on two planets at once is the mechanism of the load-sharing collapse "
+        "(section 2)", f"{clr.double_contact_two_planets_time_s:.3f} s with the clearance, "
+        f"{r60.double_contact_two_planets_time_s:.3f} s rotated 60 deg")
     ratio = clr.max_front_force_N / ref.max_front_force_N
     say(ratio > 1.1, "tooth forces increase significantly with the clearance (Figure 7)",
         f"planet 1 front-flank max {clr.max_front_force_N / 1e3:.0f} kN against "

@@ -168,7 +168,7 @@ def test_study_double_contact_shortened(tmp_path, capsys):
         assert len(ev) == s.loc[case, "n_events"]
         assert (out / f"tooth_forces_{case}.png").stat().st_size > 10_000
     html = __import__("html").unescape((out / "report.html").read_text())
-    assert "The paper's claims" in html and html.count("<li><b>") == 6
+    assert "The paper's claims" in html and html.count("<li><b>") == 7
     # the rerun resumes from the store: nothing is recomputed
     t0 = time.process_time()
     main(["study", "double-contact", "--duration", "0.6", "--out", str(out), "--quiet"])
