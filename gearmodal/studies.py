@@ -187,12 +187,20 @@ def _case_id(case: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def _callable_name(f) -> str:
+    """``module.qualname`` of a function, with a partial's arguments."""
+    import functools
+
+    if isinstance(f, functools.partial):
+        return f"{_callable_name(f.func)}(*{f.args!r}, **{sorted(f.keywords.items())!r})"
+    return f"{getattr(f, '__module__', '?')}.{getattr(f, '__qualname__', repr(f))}"
+
+
 def _scene_identity(scene) -> dict:
     """What identifies the scene in ``sweep.json``: the file and its model file's SHA-256, or
     the callable's qualified name."""
     if callable(scene):
-        return {"callable": f"{getattr(scene, '__module__', '?')}."
-                            f"{getattr(scene, '__qualname__', repr(scene))}"}
+        return {"callable": _callable_name(scene)}
     import tomllib
 
     p = Path(scene)
@@ -284,7 +292,8 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         count) processes, shut down at the end.
     store : directory. Each case is written there when it finishes (atomically, Parquet); a
         sweep started again with the same scene and store loads the finished cases and runs
-        only the others. The store refuses a different scene (its files' SHA-256 differ).
+        only the others. The store refuses a different scene (its files' SHA-256 differ) or
+        different metrics.
     metrics : ``metrics(result) -> dict`` of scalars, optionally with ``"tables"``: a dict of
         DataFrames stored per case (:func:`load_table`). Default :func:`summarize`.
         Must be picklable (a module-level function or a ``functools.partial`` of one).
@@ -308,17 +317,19 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
     if len(set(ids)) != len(ids):
         raise ModelError("parameters", "two cases are identical")
     root = None
-    ident = _scene_identity(scene)
+    ident = {**_scene_identity(scene), "metrics": _callable_name(metrics)}
     if store is not None:
         root = Path(store) / "cases"
         root.mkdir(parents=True, exist_ok=True)
         meta_path = Path(store) / "sweep.json"
         if meta_path.exists():
             old = json.loads(meta_path.read_text())
-            for key in ("scene_sha256", "model_sha256", "callable"):
-                if old.get("identity", {}).get(key) != ident.get(key):
+            old_id = old.get("identity", {})
+            for key in ("scene_sha256", "model_sha256", "callable", "metrics"):
+                if key in old_id and old_id[key] != ident.get(key):
+                    what = "metrics" if key == "metrics" else "scene"
                     raise ModelError("store", f"= {str(store)!r} was made with a different "
-                                     f"scene ({key} differs): use a new store or delete it")
+                                     f"{what} ({key} differs): use a new store or delete it")
         meta = {"identity": ident, "cases": [{"case_id": i, **c} for i, c in
                                              zip(ids, cases, strict=True)]}
         meta_path.write_text(json.dumps(meta, indent=1, default=repr))

@@ -3,6 +3,7 @@ in shortened form (studies/*.py through the CLI)."""
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import signal
@@ -64,6 +65,9 @@ def test_bad_input_is_named_and_a_store_refuses_another_scene(tmp_path):
     other = ROOT / "studies" / "scenes" / "gear_rattle.toml"
     with pytest.raises(gm.ModelError, match="store.*different scene"):
         gm.sweep(other, {"scene.t_end": [0.01]}, store=tmp_path, progress=False)
+    with pytest.raises(gm.ModelError, match="store.*different metrics"):
+        gm.sweep(STAGE, {"scene.t_end": [0.01]}, store=tmp_path, progress=False,
+                 metrics=functools.partial(summarize, tables=True))
 
 
 def test_a_sweep_killed_mid_run_resumes_with_only_the_unfinished_cases(tmp_path):
