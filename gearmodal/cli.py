@@ -169,7 +169,9 @@ def _study_module(name: str, folder: str | None):
     mod_name = f"gearmodal_study_{name.replace('-', '_')}"
     spec = importlib.util.spec_from_file_location(mod_name, path)
     mod = importlib.util.module_from_spec(spec)
-    sys.modules[mod_name] = mod  # picklable by reference in forked workers
+    # registered so that its functions pickle by reference into forked workers only (not
+    # spawn or Dask): the studies therefore hand the sweep gearmodal callables
+    sys.modules[mod_name] = mod
     spec.loader.exec_module(mod)
     return mod
 

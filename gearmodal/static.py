@@ -71,8 +71,8 @@ def _line_search(r: np.ndarray, Kd: np.ndarray, p: np.ndarray, w: np.ndarray, k:
 
     for j, t0 in enumerate(kinks):
         d0, rate = slope(t0)
-        if d0 >= 0.0:
-            return float(t0) if t0 > 0 else 1.0
+        if d0 >= 0.0:  # at t = 0: not a descent direction (rounding at convergence): stay
+            return float(t0)
         t_end = kinks[j + 1] if j + 1 < len(kinks) else np.inf
         if rate > 0.0 and t0 - d0 / rate <= t_end:
             return float(t0 - d0 / rate)
@@ -144,8 +144,9 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
     # Work in the space orthogonal to the free modes (basis Q): the minimum-norm solution, no
     # drift along motions nothing resists. The first Newton matrix is that of the given
     # (default: nominal) state, afterwards that of the contacts active at the iterate; where it
-    # cannot resist the residual (a contact still open in the loaded direction) the stiffness
-    # with all contacts engaged gives a safe descent step.
+    # cannot resist the residual (a contact still open in the loaded direction, a planet with
+    # all flanks open) a weak share of the open contacts' stiffness is added, and the exact
+    # line search goes as far along that step as the contacts allow.
     Q = (np.linalg.qr(modes, mode="complete")[0][:, modes.shape[1]:] if modes.shape[1]
          else np.eye(asm.n))
     s = asm.state(state)
@@ -162,7 +163,10 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
             # all open turns freely): a weak share of the open contacts' stiffness points the
             # step at the contacts that must close; the line search goes as far as they allow
             Hreg = Hr + 1e-6 * (Q.T @ (W[~s].T * k[~s]) @ W[~s] @ Q)
-            dr = np.linalg.solve(Hreg if np.all(np.isfinite(Hreg)) else Hr_all, -g)
+            try:
+                dr = np.linalg.solve(Hreg, -g)
+            except np.linalg.LinAlgError:  # nothing resists even then: all contacts engaged
+                dr = np.linalg.solve(Hr_all, -g)
         step = Q @ dr
         t = _line_search(K @ q - f, K @ step, p, W @ step, k, step)
         q = q + t * step

@@ -37,12 +37,12 @@ from .errors import ModelError
 
 __all__ = ["load_table", "summarize", "sweep"]
 
-#: Columns of :func:`summarize` (the double-contact study's ``summary.csv``).
-SUMMARY_COLUMNS = ["max_front_force_N", "max_back_force_N", "max_front_force_sun_planet_N",
-                   "max_back_force_sun_planet_N", "max_front_force_ring_planet_N",
-                   "max_back_force_ring_planet_N", "double_contact_time_s",
+#: Columns of :func:`summarize` (the double-contact study's ``summary.csv``), in order.
+SUMMARY_COLUMNS = ["max_front_force_N", "max_back_force_N", "double_contact_time_s",
                    "double_contact_two_planets_time_s", "max_planet_bearing_force_N",
-                   "peak_load_sharing_factor", "n_events"]
+                   "peak_load_sharing_factor", "max_front_force_sun_planet_N",
+                   "max_back_force_sun_planet_N", "max_front_force_ring_planet_N",
+                   "max_back_force_ring_planet_N", "n_events"]
 
 
 # -- what a case reports ----------------------------------------------------------------------
@@ -102,9 +102,13 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
     out["max_back_force_N"] = max(out["max_back_force_sun_planet_N"],
                                   out["max_back_force_ring_planet_N"])
     dc = sim.double_contact()
-    in_stage = dc.mesh.str.startswith(stage) if stage else np.ones(len(dc), bool)
-    single = dc[in_stage & (dc.n_planets == 1)]
-    multi = dc[in_stage & (dc.n_planets >= 2)]
+    # single episodes name their mesh ("stage1.ring_planet1"), simultaneous ones their stage
+    # ("stage1 (several planets)", or "several planets" for a stage model)
+    name = stage[:-1]
+    single = dc[(dc.n_planets == 1)
+                & (dc.mesh.map(lambda m: m.rsplit(".", 1)[0] if "." in m else "") == name)]
+    multi = dc[(dc.n_planets >= 2)
+               & (dc.mesh == (f"{name} (several planets)" if name else "several planets"))]
     out["double_contact_time_s"] = _union_length(zip(single.start, single.end, strict=True))
     out["double_contact_two_planets_time_s"] = _union_length(zip(multi.start, multi.end,
                                                                  strict=True))
@@ -125,7 +129,7 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
         out["cut_in_time_s"] = float(cut) if cut is not None else math.nan
         ld = result.turbine.loads
         out["mean_power_W"] = float(ld.loc[ld.index >= cut, "power_W"].mean()) \
-            if cut is not None else 0.0
+            if cut is not None else math.nan
     if tables:
         cols = [f"{m}.{side}" for k in ("sun", "ring") for m in meshes[k]
                 for side in ("front", "back")]
@@ -168,7 +172,7 @@ def _cases(parameters) -> tuple[list, list[dict]]:
 
 
 def _missing(v) -> bool:
-    return v is None or (isinstance(v, float) and math.isnan(v))
+    return v is None or v is pd.NA or (isinstance(v, float) and math.isnan(v))
 
 
 def _plain(v):
@@ -182,9 +186,23 @@ def _plain(v):
     return v
 
 
+def _case_json(case: dict) -> str:
+    """The case as canonical JSON: sorted keys, integral floats as integers (``1.0`` and ``1``
+    are the same case, e.g. a DataFrame column of seeds turned float by a NaN)."""
+    def norm(v):
+        if isinstance(v, float) and v.is_integer():
+            return int(v)
+        if isinstance(v, dict):
+            return {k: norm(x) for k, x in v.items()}
+        if isinstance(v, list):
+            return [norm(x) for x in v]
+        return v
+
+    return json.dumps(norm(case), sort_keys=True, default=repr)
+
+
 def _case_id(case: dict) -> str:
-    text = json.dumps(case, sort_keys=True, default=repr)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return hashlib.sha256(_case_json(case).encode()).hexdigest()[:16]
 
 
 def _callable_name(f) -> str:
@@ -208,10 +226,17 @@ def _scene_identity(scene) -> dict:
         raise ModelError("scene", f"= {str(scene)!r}: no such scene file")
     ident = {"scene": str(p.resolve()), "scene_sha256": hashlib.sha256(p.read_bytes()).hexdigest()}
     try:
-        model = p.parent / tomllib.loads(p.read_text(encoding="utf-8"))["scene"]["model"]
-        ident["model_sha256"] = hashlib.sha256(Path(model).read_bytes()).hexdigest()
-    except (KeyError, OSError, tomllib.TOMLDecodeError):
-        pass  # load_scene will name the problem
+        doc = tomllib.loads(p.read_text(encoding="utf-8"))
+    except (OSError, tomllib.TOMLDecodeError):
+        return ident  # load_scene will name the problem
+    # every file the scene refers to: the model, the turbine, an aeroelastic load file
+    refs = {"model_sha256": ("scene", "model"), "turbine_sha256": ("turbine", "file"),
+            "load_file_sha256": ("load_file", "path")}
+    for key, (table, field) in refs.items():
+        try:
+            ident[key] = hashlib.sha256((p.parent / doc[table][field]).read_bytes()).hexdigest()
+        except (KeyError, TypeError, OSError):
+            pass
     return ident
 
 
@@ -244,8 +269,7 @@ def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict) -> No
     tmp.mkdir(parents=True)
     try:
         frame = pd.DataFrame([{**row, "case_id": cid,
-                               "parameters_json": json.dumps(case, sort_keys=True,
-                                                             default=repr)}])
+                               "parameters_json": _case_json(case)}])
         frame.to_parquet(tmp / "row.parquet")
         for name, df in tables.items():
             df.to_parquet(tmp / f"{name}.parquet")
@@ -300,8 +324,10 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
     progress : a tqdm progress bar on stderr.
     blas_threads : BLAS threads per case (1: parallel cases do not oversubscribe the cores;
         None leaves the setting alone).
-    errors : ``"raise"`` (default; finished cases stay stored) or ``"record"`` (the message
-        goes into the ``error`` column and the case is not stored, so a resume retries it).
+    errors : ``"raise"`` (default: the first failure is raised after the cases already
+        running have finished and been stored; pending ones are dropped) or ``"record"`` (the
+        message goes into the ``error`` column and the case is not stored, so a resume
+        retries it).
 
     Returns
     -------
@@ -309,6 +335,8 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
     ``cpu_s`` (the case's CPU time in its worker) and ``cached`` (loaded from the store).
     ``.attrs["store"]`` holds the store path.
     """
+    if max_workers is not None and (not isinstance(max_workers, int) or max_workers < 1):
+        raise ModelError("max_workers", f"= {max_workers!r}: must be an integer >= 1")
     if errors not in ("raise", "record"):
         raise ModelError("errors", f"= {errors!r}: must be 'raise' or 'record'")
     metrics = summarize if metrics is None else metrics
@@ -325,7 +353,8 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         if meta_path.exists():
             old = json.loads(meta_path.read_text())
             old_id = old.get("identity", {})
-            for key in ("scene_sha256", "model_sha256", "callable", "metrics"):
+            for key in ("scene_sha256", "model_sha256", "turbine_sha256", "load_file_sha256",
+                        "callable", "metrics"):
                 if key in old_id and old_id[key] != ident.get(key):
                     what = "metrics" if key == "metrics" else "scene"
                     raise ModelError("store", f"= {str(store)!r} was made with a different "
@@ -357,8 +386,17 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
                 row, tables, cpu = fut.result()
             except Exception as err:
                 if errors == "raise":
+                    # keep the work already under way: store the cases still running when
+                    # they finish, drop the pending ones, then raise
                     for f in futures:
                         f.cancel()
+                    for f in cf.as_completed([f for f in futures if not f.cancelled()
+                                              and f is not fut]):
+                        if f.exception() is None and root is not None:
+                            fid, fc = futures[f]
+                            if not (root / fid).exists():
+                                r, t, cpu_f = f.result()
+                                _write_case(root, fid, fc, {**r, "cpu_s": cpu_f}, t)
                     raise
                 rows[cid] = {"error": f"{type(err).__name__}: {err}", "cached": False}
             else:

@@ -121,9 +121,11 @@ def run(out, *, step_deg: float = 2.0, torque_fractions=(0.05, 0.1, 0.25, 0.5, 1
     summary = table.groupby("case").agg(
         max_planet_bearing_force_N=("bearing_force_N", "max"),
         min_planet_bearing_force_N=("bearing_force_N", "min"),
-        max_front_force_N=("ring_front_N", "max"),
-        max_back_force_N=("ring_back_N", "max"),
-        double_contact_fraction=("double_contact", "mean")).loc[["without", "with"]]
+        max_ring_planet_front_force_N=("ring_front_N", "max"),
+        max_ring_planet_back_force_N=("ring_back_N", "max")).loc[["without", "with"]]
+    # share of the turn with double contact on at least one planet
+    any_dc = table.groupby(["case", "azimuth_deg"]).double_contact.any()
+    summary["double_contact_fraction"] = any_dc.groupby("case").mean()
     factor = summary.max_planet_bearing_force_N["with"] / \
         summary.max_planet_bearing_force_N["without"]
     summary["load_increase_factor"] = summary.max_planet_bearing_force_N / \
