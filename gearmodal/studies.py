@@ -350,6 +350,7 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         root = Path(store) / "cases"
         root.mkdir(parents=True, exist_ok=True)
         meta_path = Path(store) / "sweep.json"
+        old = {}
         if meta_path.exists():
             old = json.loads(meta_path.read_text())
             old_id = old.get("identity", {})
@@ -359,9 +360,13 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
                     what = "metrics" if key == "metrics" else "scene"
                     raise ModelError("store", f"= {str(store)!r} was made with a different "
                                      f"{what} ({key} differs): use a new store or delete it")
-        meta = {"identity": ident, "cases": [{"case_id": i, **c} for i, c in
-                                             zip(ids, cases, strict=True)]}
-        meta_path.write_text(json.dumps(meta, indent=1, default=repr))
+        # every case this store has seen, earlier runs' first (a run on a subset keeps them)
+        known = {c["case_id"]: c for c in old.get("cases", [])}
+        known.update({i: {"case_id": i, **c} for i, c in zip(ids, cases, strict=True)})
+        meta = {"identity": ident, "cases": list(known.values())}
+        tmp = meta_path.with_name(f".sweep-{uuid.uuid4().hex[:8]}.json")
+        tmp.write_text(json.dumps(meta, indent=1, default=repr))
+        os.replace(tmp, meta_path)
     rows: dict[str, dict] = {}
     for cid in ids:
         if root is not None and (root / cid / "row.parquet").exists():
