@@ -219,17 +219,20 @@ def test_study_gravity_torque_planet_bearing_load_is_the_torque_share(tmp_path):
     assert f.load_increase_factor.is_monotonic_decreasing  # radial load matters less
 
 
-def test_study_mounting_azimuth_120_deg_is_0_deg_again(tmp_path):
-    """Three blades and three planets: mounting the rotor 120 deg further is the same
-    drivetrain with the planets renumbered, so the stage-wide results repeat."""
+def test_study_mounting_azimuth_names_the_best_and_worst_mounting(tmp_path):
     out = tmp_path / "ma"
     assert main(["study", "mounting-azimuth", "--duration", "0.3", "--step", "60", "--out",
                  str(out), "--quiet"]) == 0
     s = pd.read_csv(out / "summary.csv", index_col="azimuth_deg")
     assert list(s.index) == [0.0, 60.0, 120.0]
-    for col in ("max_planet_bearing_force_N", "double_contact_time_s"):
-        assert s.loc[120.0, col] == pytest.approx(s.loc[0.0, col], rel=1e-6, abs=1e-9)
-    assert "Best mounting" in (out / "report.html").read_text()
+    for col in ("max_planet_bearing_force_N", "max_front_force_N", "double_contact_time_s"):
+        assert col in s and s[col].notna().all()
+    assert (s.double_contact_time_s > 0).all()  # the 'clearance' gearbox wedges from the start
+    text = __import__("html").unescape((out / "report.html").read_text())
+    best = s.max_planet_bearing_force_N.idxmin()
+    worst = s.max_planet_bearing_force_N.idxmax()
+    assert f"Best mounting (lowest planet-bearing peak): {best:g} deg" in text
+    assert f"worst: {worst:g} deg" in text
 
 
 def test_study_clearance_map_double_contact_needs_clearance_beyond_backlash(tmp_path):
