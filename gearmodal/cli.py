@@ -181,9 +181,9 @@ def cmd_study(args) -> int:
 
     mod = _study_module(args.study, args.studies)
     params = inspect.signature(mod.run).parameters
-    given = {"duration": args.duration, "seed": args.seed, "step_deg": args.step,
-             "max_workers": args.workers}
-    flags = {"duration": "--duration", "seed": "--seed", "step_deg": "--step",
+    given = {"duration": args.duration, "seed": args.seed, "seeds": args.seeds,
+             "step_deg": args.step, "max_workers": args.workers}
+    flags = {"duration": "--duration", "seed": "--seed", "seeds": "--seeds", "step_deg": "--step",
              "max_workers": "--workers"}
     kwargs = {"progress": not args.quiet}
     for key, value in given.items():
@@ -193,6 +193,8 @@ def cmd_study(args) -> int:
             raise ModelError(flags[key], f"the {args.study} study does not take it")
         if key in ("duration", "step_deg") and not value > 0:
             raise ModelError(flags[key], f"= {value!r}: must be > 0")
+        if key == "seeds" and value < 1:
+            raise ModelError(flags[key], f"= {value!r}: must be an integer >= 1")
         kwargs[key] = value
     summary = mod.run(args.out, **kwargs)
     with __import__("pandas").option_context("display.width", 160, "display.max_columns", 8):
@@ -246,6 +248,8 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--duration", type=float, help="simulated time per case, s (turbine "
                     "studies: default 30 s, the paper's start-up, cut-in and operation)")
     st.add_argument("--seed", type=int, help="turbulence seed (default 1)")
+    st.add_argument("--seeds", type=int, help="number of turbulence seeds from --seed on "
+                    "(mounting-azimuth; default 1)")
     st.add_argument("--step", type=float, help="azimuth step, deg (gravity-torque, "
                     "mounting-azimuth)")
     st.add_argument("--workers", type=int, help="parallel processes (default: CPU count)")
