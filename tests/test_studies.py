@@ -235,6 +235,23 @@ def test_study_mounting_azimuth_names_the_best_and_worst_mounting(tmp_path):
     assert f"worst: {worst:g} deg" in text
 
 
+def test_study_mounting_azimuth_with_seeds_averages_the_runs(tmp_path):
+    out = tmp_path / "ms"
+    assert main(["study", "mounting-azimuth", "--duration", "0.2", "--step", "120", "--seeds",
+                 "2", "--seed", "4", "--out", str(out), "--quiet"]) == 0
+    runs = pd.read_csv(out / "runs.csv")
+    s = pd.read_csv(out / "summary.csv", index_col="azimuth_deg")
+    pairs = sorted(zip(runs.azimuth_deg, runs.seed, strict=True))
+    assert pairs == [(0.0, 4), (0.0, 5), (120.0, 4),
+                     (120.0, 5)]
+    assert (s.n_seeds == 2).all()
+    mean = runs.groupby("azimuth_deg").max_planet_bearing_force_N.mean()
+    np.testing.assert_allclose(s.max_planet_bearing_force_N, mean, rtol=1e-12)
+    # different seeds are different wind: the runs differ
+    r0 = runs[runs.azimuth_deg == 0.0].max_planet_bearing_force_N.to_numpy()
+    assert r0[0] != r0[1]
+
+
 def test_study_clearance_map_double_contact_needs_clearance_beyond_backlash(tmp_path):
     mod = _study_module("clearance-map", None)
     s = mod.run(tmp_path / "cm", duration=0.1, clearances=(0.0, 1e-3),
