@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import sys
+import tomllib
 from pathlib import Path
 
 import pandas as pd
@@ -26,8 +27,10 @@ from gearmodal.studies import SUMMARY_COLUMNS, load_table, summarize
 
 HERE = Path(__file__).resolve().parent
 SCENE = HERE / "scenes" / "600kw_turbine_10ms.toml"
-#: the 'clearance' gearbox's carrier bearing (N/m, m): the studied fault
-CLEARANCE = {"stiffness": {"x": 1.0e8, "y": 1.0e8}, "clearance": {"x": 1.0e-3, "y": 1.0e-3}}
+#: the 'clearance' gearbox's carrier bearing (N/m, m): the studied fault, as defined once in
+#: planetary_clearance.toml (1e8 N/m, 1 mm per axis)
+CLEARANCE = tomllib.loads((HERE / "models" / "planetary_clearance.toml").read_text(
+    encoding="utf-8"))["planetary_stage"]["carrier_bearing"]
 COLUMNS = [*SUMMARY_COLUMNS, "cut_in_time_s", "mean_power_W", "cpu_s"]
 
 
