@@ -106,8 +106,9 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         degrees, and refrozen for the next segment (state carried over exactly). Segments are
         whole output steps, so the effective tolerance is at least the azimuth of one ``dt``.
         Smaller is more accurate and costs more exponentials; a measured knob (DESIGN 3.2).
-    options : method options: ``max_events_per_step`` (exact), ``scipy_method``, ``rtol``,
-        ``atol`` (scipy).
+    options : method options: ``max_events_per_step`` and ``propagator`` (``"taylor"``,
+        the default, or ``"expm"``; see :func:`gearmodal.integrate.exact.run_exact`) for the
+        exact method; ``scipy_method``, ``rtol``, ``atol`` (scipy).
 
     Examples
     --------

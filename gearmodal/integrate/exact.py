@@ -1,5 +1,8 @@
 """The exact event-driven piecewise-linear integrator (DESIGN 3.2).
 
+Two propagators of the same exact solution: ``propagator="taylor"`` (the default,
+:mod:`gearmodal.integrate.taylor`) and ``"expm"``, described here.
+
 Between contact-state changes the system is linear and is propagated exactly by matrix
 exponentials (first-order hold on the force, :mod:`gearmodal.integrate.system`). Every contact
 has a gap linear in the state, so at the ends of any propagated piece its value and rate are
@@ -23,6 +26,11 @@ import numpy as np
 from ..errors import ModelError
 from .kernels import advance_state, fast_steps
 from .system import TAYLOR_TERMS, PiecewiseLinearSystem, Propagators
+from .taylor import TaylorIntegrator
+
+#: how the exact method propagates a contact state: "taylor" (series of the exact solution,
+#: all in numba, no per-state setup) or "expm" (cached augmented exponentials per state)
+PROPAGATORS = ("taylor", "expm")
 
 #: a receding gap whose Hermite interpolant comes this close to contact (relative to the
 #: change of the gap over the piece) is examined for a hidden brief contact
@@ -116,14 +124,38 @@ class ExactIntegrator:
 
 
 def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
-              x0: np.ndarray, s0: np.ndarray, max_events_per_step: int = 200):
+              x0: np.ndarray, s0: np.ndarray, max_events_per_step: int = 200,
+              propagator: str = "taylor"):
     """Integrate ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
 
     ``F_grid`` (n_steps + 1, n) is the generalised force at the output times (linear in
     between); with an input basis on the system it must lie in it (checked). Returns
     ``(X, S, events, stats)``: states (n_steps + 1, 2n), contact states
     (n_steps + 1, n_contacts), events as tuples (time, contact, before, after, rate, force).
+
+    ``propagator``: ``"taylor"`` (default) sums the Taylor series of the exact solution in
+    numba from every event and over pieces of ``rho h <= 2`` (:mod:`gearmodal.integrate.taylor`;
+    no per-state setup, the event loop never returns to Python); ``"expm"`` propagates with
+    augmented exponentials cached per contact state and dyadic step (``ExactIntegrator``;
+    ~170 us per new state, then one product per output step). Both are exact to rounding;
+    ``"expm"`` pays off only when few contact states recur over many steps with ``dt`` much
+    longer than the fastest period.
     """
+    if propagator not in PROPAGATORS:
+        raise ModelError("propagator", f"= {propagator!r}: must be one of "
+                         + ", ".join(map(repr, PROPAGATORS)))
+    if propagator == "taylor":
+        key = ("taylor", float(dt), int(max_events_per_step))
+        cache = system.__dict__.setdefault("_exact_integrators", {})
+        integ = cache.get(key)
+        if integ is None:
+            integ = cache[key] = TaylorIntegrator(system, dt, max_events_per_step)
+        F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))
+        X, S, events = integ.run(n_steps, F_grid, x0, s0)
+        if not np.all(np.isfinite(X)):
+            bad = int(np.flatnonzero(~np.all(np.isfinite(X), axis=1))[0])
+            raise ModelError("simulate", f"the solution is not finite at t = {bad * dt:.9g} s")
+        return X, S, events, {"exponentials": 0, **integ.counts}
     # the propagators belong to the frozen system: callers that advance one system in several
     # calls (the turbine co-simulation) keep its exponentials
     key = (float(dt), int(max_events_per_step))

@@ -11,6 +11,12 @@ from gearmodal.integrate.system import PiecewiseLinearSystem
 I_P, I_W, K_MESH = 1e-3, 1.6e-2, 2e8
 
 
+@pytest.fixture(params=["taylor", "expm"])
+def propagator(request):
+    """Both propagators of the exact method must pass every closed form."""
+    return request.param
+
+
 def pair(backlash):
     p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=I_P)
     w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=I_W)
@@ -32,7 +38,7 @@ def rattle_times(b, rp, rw, approach, n):
 
 
 @pytest.mark.parametrize("dt", [1e-4, 3e-3])
-def test_rattle_contact_and_separation_times(dt):
+def test_rattle_contact_and_separation_times(dt, propagator):
     """Free flight inside the backlash, contact, separation, flight to the back flank...:
     every event time equals the closed form to machine precision, also with dt 18 times longer
     than the contact (brief contacts inside one step are found)."""
@@ -40,7 +46,7 @@ def test_rattle_contact_and_separation_times(dt):
     model, rp, rw = pair(b)
     om = 1.0  # pinion speed, rad/s; the wheel at rest
     sim = gm.simulate(model, 0.02, dt=dt, q0={"pinion.theta": -b / 2 / rp},
-                      v0={"pinion.theta": om})
+                      v0={"pinion.theta": om}, propagator=propagator)
     ev = sim.events
     expect = rattle_times(b, rp, rw, rp * om, len(ev))
     assert len(ev) >= 12
@@ -53,21 +59,21 @@ def test_rattle_contact_and_separation_times(dt):
     np.testing.assert_allclose(np.abs(ev.gap_rate), rp * om, rtol=1e-12)
 
 
-def test_brief_contact_much_shorter_than_dt_is_found():
+def test_brief_contact_much_shorter_than_dt_is_found(propagator):
     b = 1e-4
     model, rp, rw = pair(b)
     me = 1.0 / (rp**2 / I_P + rw**2 / I_W)
     contact = math.pi / math.sqrt(K_MESH / me)
     dt = 50 * contact
     sim = gm.simulate(model, 4 * dt, dt=dt, q0={"pinion.theta": -b / 2 / rp},
-                      v0={"pinion.theta": 1.0})
+                      v0={"pinion.theta": 1.0}, propagator=propagator)
     first = sim.events.iloc[:2]
     t1 = (b / 2) / (rp * 1.0)
     np.testing.assert_allclose(first.time, [t1, t1 + contact], rtol=1e-13)
     assert first.time.iloc[1] - first.time.iloc[0] < dt / 40
 
 
-def test_bearing_clearance_closes_under_step_load():
+def test_bearing_clearance_closes_under_step_load(propagator):
     """A mass in a dead band c under a step force F from rest: free flight to x = c at
     t_c = sqrt(2 m c / F), then the spring; it leaves the contact when
     theta = omega (t - t_c) = 2 pi - 2 atan(v_c k / (omega F))."""
@@ -76,7 +82,7 @@ def test_bearing_clearance_closes_under_step_load():
     model.add(gm.RigidBody(name="body", mass=m_, inertia=1.0, dofs="planar"))
     model.add(gm.Bearing("b", "body", None, stiffness={"x": k, "y": k, "theta": 1e4},
                          clearance={"x": c}))
-    sim = gm.simulate(model, 0.05, dt=1e-3, loads={"body.force_x": F})
+    sim = gm.simulate(model, 0.05, dt=1e-3, loads={"body.force_x": F}, propagator=propagator)
     tc = math.sqrt(2 * m_ * c / F)
     om = math.sqrt(k / m_)
     vc = F / m_ * tc
@@ -86,7 +92,7 @@ def test_bearing_clearance_closes_under_step_load():
     assert list(ev.state_after.iloc[:2]) == ["closed", "open"]
 
 
-def test_undamped_energy_is_conserved_over_many_switches():
+def test_undamped_energy_is_conserved_over_many_switches(propagator):
     """No loads, no damping: the mechanical energy stays constant through 1e5
     contact switches. The rigid-body mode is started at rest so that the angles stay small
     (gaps are differences of angles; a drifting rotation would cost digits)."""
@@ -94,7 +100,7 @@ def test_undamped_energy_is_conserved_over_many_switches():
     model, rp, rw = pair(b)
     wd = I_P * rw / (I_W * rp)  # zero momentum of the free rotation
     sim = gm.simulate(model, 9.8, dt=1e-4, q0={"pinion.theta": -b / 2 / rp},
-                      v0={"pinion.theta": 1.0, "wheel.theta": wd})
+                      v0={"pinion.theta": 1.0, "wheel.theta": wd}, propagator=propagator)
     n_switch = len(sim.events)
     assert n_switch >= 100_000
     S = PiecewiseLinearSystem(model.assemble())
@@ -118,14 +124,14 @@ def clearance_stage():
     return m
 
 
-def test_exact_agrees_with_tight_solve_ivp_on_planetary_stage_with_clearance():
+def test_exact_agrees_with_tight_solve_ivp_on_planetary_stage_with_clearance(propagator):
     """A Lin & Parker stage whose carrier has a bearing clearance larger than the backlash,
     driven by a torque and a radial force into double contact: the exact method and DOP853 at
     rtol 1e-12 give the same trajectory and the same events."""
     m = clearance_stage()
     loads = {"carrier.force_u": 2e3, "sun.force_u": -2e3, "carrier.force_y": -3e3}
     kw = dict(dt=2e-5, loads=loads)
-    ex = gm.simulate(m, 0.004, **kw)
+    ex = gm.simulate(m, 0.004, propagator=propagator, **kw)
     ref = gm.simulate(m, 0.004, method="scipy", scipy_method="DOP853", rtol=1e-12,
                       atol=1e-18, **kw)
     assert len(ex.events) > 10
@@ -137,7 +143,7 @@ def test_exact_agrees_with_tight_solve_ivp_on_planetary_stage_with_clearance():
     np.testing.assert_allclose(ex.events.time, ref.events.time, rtol=0, atol=1e-9)
 
 
-def test_contact_hidden_by_same_sign_end_rates_is_found():
+def test_contact_hidden_by_same_sign_end_rates_is_found(propagator):
     """Free flight under a load varying linearly over the step: the gap is an exact cubic whose
     rate is positive at both step ends but which rises above zero and comes back inside the
     step (found in review). Closed form of the free-flight gap (normalised):
@@ -153,14 +159,14 @@ def test_contact_hidden_by_same_sign_end_rates_is_found():
     load = pd.Series([T0, -T0, -T0], index=[0, dt, 2 * dt])
     sim = gm.simulate(m, dt, dt=dt, loads={"pinion.torque": load},
                       q0={"pinion.theta": -0.01 * G / Wp},
-                      v0={"pinion.theta": 0.16 * G / dt / Wp})
+                      v0={"pinion.theta": 0.16 * G / dt / Wp}, propagator=propagator)
     tau = brentq(lambda s: -0.01 + 0.16 * s - s**2 / 2 + s**3 / 3, 0, 0.2, xtol=1e-16)
     first = sim.events.iloc[0]
     assert (first.contact, first.state_after) == ("front", "closed")
     assert first.time == pytest.approx(tau * dt, rel=1e-12)
 
 
-def test_graze_narrower_than_the_taylor_samples_is_found():
+def test_graze_narrower_than_the_taylor_samples_is_found(propagator):
     """A constant force decelerating the gap: a parabola positive only on [0.505, 0.515] dt,
     between two of the samples of a Taylor piece (found in review)."""
     from scipy.optimize import brentq
@@ -173,7 +179,8 @@ def test_graze_narrower_than_the_taylor_samples_is_found():
     v0 = acc * tc
     g0 = acc * (w / 2) ** 2 / 2 - acc * tc**2 / 2
     sim = gm.simulate(m, dt, dt=dt, loads={"pinion.torque": -acc * Jp / Wp},
-                      q0={"pinion.theta": g0 / Wp}, v0={"pinion.theta": v0 / Wp})
+                      q0={"pinion.theta": g0 / Wp}, v0={"pinion.theta": v0 / Wp},
+                      propagator=propagator)
     t_in = brentq(lambda t: g0 + v0 * t - acc * t**2 / 2, 0, tc, xtol=1e-20)
     assert len(sim.events) == 2
     assert sim.events.time.iloc[0] == pytest.approx(t_in, rel=1e-10)

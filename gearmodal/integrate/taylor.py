@@ -1,0 +1,578 @@
+"""All-numba Taylor propagation of the exact method (DESIGN 3.2), for event-dense runs.
+
+Inside one contact state the motion is linear, ``M q'' + C_s q' + K_s q = F(t) + f_s`` with the
+force linear over each output step (first-order hold), so the exact solution from any instant
+is an entire function of time whose Taylor coefficients follow from the recursion::
+
+    a_0 = q,  a_1 = v,
+    (k + 1)(k + 2) a_(k+2) = g_k - M^-1 K_s a_k - (k + 1) M^-1 C_s a_(k+1)        (T1)
+    g_0 = M^-1 (F(t) + f_s),  g_1 = M^-1 F',  g_k = 0 for k >= 2
+
+(``q(t + tau) = sum_k a_k tau^k``). A piece of length ``h`` with ``rho h <= reach``, ``rho`` a
+bound of the spectral radius of every contact state's first-order matrix, is summed to
+machine precision by ``n_terms`` terms (truncation ~ ``reach^n_terms / n_terms!``); the scaled
+coefficients ``b_k = a_k h^k`` are kept so that nothing overflows in stiff states, and a piece
+whose last terms are not negligible against its largest (a state stiffer than the bound) is
+halved by rescaling ``b_k`` by ``2^-k`` until they are.
+
+No per-state setup beyond two rank-one sums (``M^-1 K_s``, ``M^-1 C_s`` from the always-active
+part plus the closed contacts): a new contact state costs nothing like the augmented matrix
+exponential of :mod:`gearmodal.integrate.system`, which is what makes runs in which almost
+every event enters a new state (a carrier rattling in its clearance against three planets)
+cheap. Events are found as in :mod:`gearmodal.integrate.exact`: the end values and rates of
+each gap over a piece of at most half the fastest period flag candidates (a sign change or a
+Hermite interpolant reaching near contact), and a candidate's gap polynomial (the Taylor
+series of the exact solution, projected on the contact) is searched for its first root to
+machine precision (:func:`gearmodal.integrate.kernels.poly_first_root`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .kernels import _bisect_up, _dpoly, candidate
+from .kernels import _poly as _hpoly
+
+#: rho * (piece length) at most this: every modal component turns by at most 2 rad per piece
+REACH = 2.0
+#: terms of the series; REACH^N / N! = 2.7e-17
+N_TERMS = 24
+#: Bernstein subdivisions at most (intervals of 2^-DEPTH of a piece)
+DEPTH = 60
+#: contact switches applied as rank-one updates before the state's matrices are rebuilt
+REFRESH = 64
+#: the last two scaled terms must be below this fraction of the largest one (the terms then
+#: fall by a factor reach / N_TERMS ~ 0.08 each, so the remainder is ~1e-16 of the largest)
+TAIL = 1e-15
+
+
+def terms_for(reach: float, tol: float = 3e-17) -> int:
+    """Smallest number of terms whose truncation bound ``reach^n / n!`` is below ``tol``."""
+    n, term = 1, reach
+    while term > tol and n < 200:
+        n += 1
+        term *= reach / n
+    return n
+
+
+@numba.njit(cache=True)
+def _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc):
+    """``M^-1 K_s``, ``M^-1 C_s`` and ``M^-1 f_s`` of contact state ``s`` (rank-one sums of
+    ``u_e w_e^T``, ``u_e = M^-1 w_e``, over the closed contacts; system.matrices)."""
+    n = MK0.shape[0]
+    for i in range(n):
+        acc[i] = 0.0
+        for j in range(n):
+            MKC[i, j] = MK0[i, j]
+            MKC[i, n + j] = MC0[i, j]
+    for e in range(W.shape[0]):
+        if s[e]:
+            ke, ce, fe = kc[e], cc[e], kc[e] * off[e]
+            for i in range(n):
+                ui = U[e, i]
+                if ui != 0.0:
+                    acc[i] += fe * ui
+                    for j in range(n):
+                        wj = W[e, j]
+                        MKC[i, j] += ke * ui * wj
+                        MKC[i, n + j] += ce * ui * wj
+
+
+@numba.njit(cache=True)
+def _toggle(U, W, kc, cc, off, e, sign, MKC, acc):
+    """Add (sign 1) or remove (sign -1) contact ``e``'s rank-one terms in place."""
+    n = W.shape[1]
+    ke, ce, fe = sign * kc[e], sign * cc[e], sign * kc[e] * off[e]
+    for i in range(n):
+        ui = U[e, i]
+        if ui != 0.0:
+            acc[i] += fe * ui
+            for j in range(n):
+                wj = W[e, j]
+                MKC[i, j] += ke * ui * wj
+                MKC[i, n + j] += ce * ui * wj
+
+
+@numba.njit(cache=True, fastmath=True)
+def _coefficients(MKC, MinvU, acc, q, v, Fa, slope, h, B, y):
+    """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions by (T1); ``MKC`` is
+    ``[M^-1 K_s, M^-1 C_s]`` side by side (one contiguous product per term); ``y`` is scratch
+    of length 4 n (no allocation in the hot loop)."""
+    n_terms, n = B.shape
+    m = MinvU.shape[1]
+    h2 = h * h
+    for i in range(n):
+        s0 = acc[i]
+        s1 = 0.0
+        for j in range(m):
+            s0 += MinvU[i, j] * Fa[j]
+            s1 += MinvU[i, j] * slope[j]
+        B[0, i] = q[i]
+        B[1, i] = v[i] * h
+        y[2 * n + i] = s0  # the forcing terms g_0, g_1 of (T1), added below
+        y[3 * n + i] = s1
+    for k in range(n_terms - 2):
+        den = 1.0 / ((k + 1.0) * (k + 2.0))
+        c2 = -h2 * den
+        c1 = -(k + 1.0) * h * den
+        for j in range(n):
+            y[j] = B[k, j] * c2
+            y[n + j] = B[k + 1, j] * c1
+        for i in range(n):
+            a = 0.0
+            for j in range(2 * n):
+                a += MKC[i, j] * y[j]
+            B[k + 2, i] = a
+        if k == 0:
+            for i in range(n):
+                B[2, i] += y[2 * n + i] * h2 * den
+        elif k == 1:
+            for i in range(n):
+                B[3, i] += y[3 * n + i] * h2 * h * den
+
+
+@numba.njit(cache=True)
+def _converged(B, tail):
+    n_terms, n = B.shape
+    big = 0.0
+    for k in range(n_terms):
+        for i in range(n):
+            big = max(big, abs(B[k, i]) * max(k, 1))
+    if big == 0.0 or not np.isfinite(big):
+        return True  # (a non-finite state is reported by the caller)
+    last = 0.0
+    for k in range(n_terms - 2, n_terms):
+        for i in range(n):
+            last = max(last, abs(B[k, i]) * k)
+    return last <= tail * big
+
+
+@numba.njit(cache=True)
+def _evaluate(B, tau, h, q, v):
+    """Positions and velocities at ``tau`` (0..1 of the piece) from the scaled rows."""
+    n_terms, n = B.shape
+    for i in range(n):
+        a = B[n_terms - 1, i]
+        d = (n_terms - 1) * B[n_terms - 1, i]
+        for k in range(n_terms - 2, -1, -1):
+            a = a * tau + B[k, i]
+            if k >= 1:
+                d = d * tau + k * B[k, i]
+        q[i] = a
+        v[i] = d / h
+
+
+@numba.njit(cache=True)
+def _gaps(W, off, s, q, v, g, r):
+    """Signed gaps (> 0: the contact must switch) and their rates."""
+    nc, n = W.shape
+    for e in range(nc):
+        p = -off[e]
+        rr = 0.0
+        for i in range(n):
+            p += W[e, i] * q[i]
+            rr += W[e, i] * v[i]
+        sg = -1.0 if s[e] else 1.0
+        g[e] = sg * p
+        r[e] = sg * rr
+
+
+@numba.njit(cache=True)
+def _bernstein(c, b):
+    """Bernstein coefficients on [0, 1] of ``sum c_k tau^k``: ``b_i = sum_k C(i, k) / C(d, k)
+    c_k``, by repeated summation (O(d^2))."""
+    d = c.shape[0] - 1
+    binom = 1.0
+    for k in range(d + 1):
+        b[k] = c[k] / binom
+        binom = binom * (d - k) / (k + 1.0)
+    for j in range(1, d + 1):
+        for i in range(d, j - 1, -1):
+            b[i] += b[i - 1]
+
+
+@numba.njit(cache=True)
+def _split(b, left, right, w):
+    """de Casteljau at 1/2: Bernstein coefficients of the two halves (``w``: scratch)."""
+    d = b.shape[0] - 1
+    w[:] = b
+    left[0] = w[0]
+    right[d] = w[d]
+    for r in range(1, d + 1):
+        for i in range(d - r + 1):
+            w[i] = 0.5 * (w[i] + w[i + 1])
+        left[r] = w[0]
+        right[d - r] = w[d - r]
+
+
+@numba.njit(cache=True)
+def _refine(coef, lo, hi):
+    """The crossing of ``g`` inside [lo, hi] (g(lo) <= 0 < g(hi), one root): Newton's method
+    kept inside the bracket (bisection when a step leaves it), the bracket closed around the
+    converged point, then bisection to adjacent floating-point numbers; returns the upper end
+    (g > 0)."""
+    glo = _hpoly(coef, lo)
+    ghi = _hpoly(coef, hi)
+    x = (lo * ghi - hi * glo) / (ghi - glo) if ghi > glo else 0.5 * (lo + hi)
+    if not (lo < x < hi):
+        x = 0.5 * (lo + hi)
+    for _ in range(40):
+        gx = _hpoly(coef, x)
+        if gx > 0.0:
+            hi = x
+        else:
+            lo = x
+        if hi - lo <= 4.0 * np.spacing(hi):
+            break
+        dx = _dpoly(coef, x)
+        xn = x - gx / dx if dx != 0.0 else 0.5 * (lo + hi)
+        if gx == 0.0 or abs(xn - x) <= 4.0 * np.spacing(x):
+            # converged: close the bracket a few units in the last place either side
+            d = 4.0 * np.spacing(x)
+            if lo < x - d and _hpoly(coef, x - d) <= 0.0:
+                lo = x - d
+            if x + d < hi and _hpoly(coef, x + d) > 0.0:
+                hi = x + d
+            break
+        x = xn if lo < xn < hi else 0.5 * (lo + hi)
+    return _bisect_up(coef, lo, hi)
+
+
+@numba.njit(cache=True)
+def first_root(coef, work, stk):
+    """First crossing of ``g(tau) = sum coef[k] tau^k`` from <= 0 to > 0 in [0, 1]; ``inf``
+    if none (callers search [0, L] by scaling ``coef[k]`` by ``L^k``).
+
+    Rigorous root isolation by Bernstein subdivision: an interval whose Bernstein
+    coefficients are all <= 0 holds no crossing (convex hull property); one whose coefficients
+    change sign once holds exactly one (Descartes' rule for the Bernstein basis), located by
+    Newton's method and bisection on ``g`` to adjacent floating-point numbers (the returned
+    point has g > 0); otherwise it is halved, left half first. A negative ``g(0)`` plus the
+    positive coefficients below zero excludes a root at once. At tau = 0, a gap that is due
+    (positive and rising, or zero with its first nonzero derivative positive) gives 0; a gap
+    left positive by rounding but receding is treated as zero. ``work`` (depth + 5, d + 1)
+    and ``stk`` (2, depth + 1) are scratch.
+    """
+    d = coef.shape[0] - 1
+    g0 = coef[0]
+    if g0 > 0.0 and coef[1] > 0.0:
+        return 0.0
+    if g0 < 0.0:
+        # g <= g0 + sum of the positive coefficients on [0, 1]: often enough
+        ub = g0
+        for k in range(1, d + 1):
+            if coef[k] > 0.0:
+                ub += coef[k]
+        if ub <= 0.0:
+            return np.inf
+    depth_max = work.shape[0] - 5
+    c = work[depth_max + 1]
+    left = work[depth_max + 2]
+    right = work[depth_max + 3]
+    b = work[depth_max + 4]
+    c[:] = coef
+    if g0 >= 0.0:
+        c[0] = 0.0
+        for k in range(1, d + 1):
+            if c[k] != 0.0:
+                if c[k] > 0.0:
+                    return 0.0
+                break
+    _bernstein(c, work[0])
+    stk[0, 0] = 0.0
+    stk[1, 0] = 1.0
+    top = 1
+    while top > 0:
+        top -= 1
+        a = stk[0, top]
+        b[:] = work[top]
+        w = stk[1, top]
+        mx = b[0]
+        changes = 0
+        prev = b[0]
+        for i in range(1, d + 1):
+            mx = max(mx, b[i])
+            if b[i] != 0.0:
+                if prev != 0.0 and (b[i] > 0.0) != (prev > 0.0):
+                    changes += 1
+                prev = b[i]
+        if mx <= 0.0:
+            continue
+        if b[0] > 0.0:
+            return a  # the left neighbours hold no crossing
+        if changes == 1 and b[d] > 0.0:
+            hi = a + w
+            if _hpoly(coef, hi) > 0.0:
+                return _refine(coef, a, hi)
+        if top + 2 > depth_max:
+            if b[d] > 0.0:
+                return a + w
+            continue
+        _split(b, left, right, c)
+        work[top, :] = right
+        stk[0, top] = a + 0.5 * w
+        stk[1, top] = 0.5 * w
+        work[top + 1, :] = left
+        stk[0, top + 1] = a
+        stk[1, top + 1] = 0.5 * w
+        top += 2
+    return np.inf
+
+
+@numba.njit(cache=True)
+def taylor_run(MK0, MC0, U, W, kc, cc, off, MinvU, F, x, s, k0, n_steps, dt, h_max,
+               n_terms, n_short, margin, n_samples, simultaneous, max_events, X, S, EV, n_ev,
+               counts):
+    """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
+
+    ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
+    ``MinvU`` (linear in between); rows ``X[k + 1]``, ``S[k + 1]`` are written after each step
+    and every contact-state change appended to ``EV`` (time, contact, before, after, rate,
+    force) from row ``n_ev``. Returns ``(status, k, n_ev, contact)``: status 0 = done; 1 = the
+    event buffer may overflow in the next step (grow it and call again from step ``k`` with
+    ``x``, ``s`` as left); 2 = more than ``max_events`` changes inside step ``k``, the last at
+    ``contact``. ``counts`` (int64, 3) accumulates the pieces summed, the pieces halved (a
+    state stiffer than ``h_max`` allows) and the gap polynomials searched for a root.
+    """
+    N = x.shape[0]
+    n = N // 2
+    nc = W.shape[0]
+    MKC = np.empty((n, 2 * n))
+    acc = np.empty(n)
+    B = np.empty((n_terms, n))
+    q = x[:n].copy()
+    v = x[n:].copy()
+    qb = np.empty(n)
+    vb = np.empty(n)
+    ga = np.empty(nc)
+    ra = np.empty(nc)
+    gb = np.empty(nc)
+    rb = np.empty(nc)
+    coef = np.empty(n_terms)
+    work = np.empty((DEPTH + 5, n_terms))
+    stk = np.empty((2, DEPTH + 1))
+    ysc = np.empty(4 * n)
+    roots = np.empty(nc)
+    Fa = np.empty(F.shape[1])
+    slope = np.empty(F.shape[1])
+    _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+    toggled = 0
+    dense = False
+    cap = EV.shape[0]
+    k = k0
+    while k < n_steps:
+        if n_ev + max_events + nc + 1 > cap:
+            x[:n] = q
+            x[n:] = v
+            return 1, k, n_ev, -1
+        tk = k * dt
+        t_end = tk + dt
+        for j in range(F.shape[1]):
+            slope[j] = (F[k + 1, j] - F[k, j]) / dt
+        t = tk
+        count = 0
+        while True:
+            remaining = t_end - t
+            if remaining <= 1e-13 * dt:
+                break
+            # right after a quick succession of events the next one is likely near: a piece
+            # of a quarter of the reach needs fewer terms (ends of pieces cost nothing)
+            nt = n_short if dense else n_terms
+            hm = 0.25 * h_max if dense else h_max
+            Bv = B[:nt]
+            h = min(hm, remaining)
+            if h < remaining and remaining - h < 1e-3 * hm:
+                h = 0.5 * remaining  # no sliver before the output time
+            for j in range(F.shape[1]):
+                Fa[j] = F[k, j] + slope[j] * (t - tk)
+            _coefficients(MKC, MinvU, acc, q, v, Fa, slope, h, Bv, ysc)
+            counts[0] += 1
+            while not _converged(Bv, TAIL):
+                counts[1] += 1
+                # a state stiffer than the bound: halve the piece (rescale b_k by 2^-k)
+                h *= 0.5
+                f = 1.0
+                for kk in range(nt):
+                    for i in range(n):
+                        Bv[kk, i] *= f
+                    f *= 0.5
+            _evaluate(Bv, 1.0, h, qb, vb)
+            _gaps(W, off, s, q, v, ga, ra)
+            _gaps(W, off, s, qb, vb, gb, rb)
+            # contacts whose gap has crossed by the end first (a certain root gives an early
+            # bound), then those flagged as possible brief contacts, searched only up to it
+            best = np.inf
+            for e in range(nc):
+                roots[e] = np.inf
+            for sweep in range(2):
+                for e in range(nc):
+                    if (gb[e] > 0.0) != (sweep == 0):
+                        continue
+                    if sweep == 1 and not candidate(ga[e], ra[e] * h, gb[e], rb[e] * h, 1.0,
+                                                    margin):
+                        continue
+                    limit = min(best + simultaneous / h, 1.0)
+                    sg = -1.0 if s[e] else 1.0
+                    scale = 1.0
+                    for kk in range(nt):
+                        a = 0.0
+                        for i in range(n):
+                            a += W[e, i] * Bv[kk, i]
+                        coef[kk] = sg * a * scale
+                        scale *= limit
+                    coef[0] -= sg * off[e]
+                    r = first_root(coef[:nt], work[:, :nt], stk)
+                    counts[2] += 1
+                    if r < np.inf:
+                        roots[e] = r * limit
+                        best = min(best, roots[e])
+            if best == np.inf:
+                t = t_end if h == remaining else t + h
+                for i in range(n):
+                    q[i] = qb[i]
+                    v[i] = vb[i]
+                dense = False
+                continue
+            _evaluate(Bv, best, h, q, v)
+            dense = best * h < 0.25 * h_max
+            t = t + best * h
+            tol = simultaneous / h
+            last = -1
+            for e in range(nc):
+                if roots[e] <= best + tol:
+                    before = s[e]
+                    s[e] = not before
+                    p = -off[e]
+                    rr = 0.0
+                    for i in range(n):
+                        p += W[e, i] * q[i]
+                        rr += W[e, i] * v[i]
+                    force = kc[e] * max(p, 0.0) + cc[e] * rr if s[e] else 0.0
+                    EV[n_ev, 0] = t
+                    EV[n_ev, 1] = e
+                    EV[n_ev, 2] = 1.0 if before else 0.0
+                    EV[n_ev, 3] = 1.0 if s[e] else 0.0
+                    EV[n_ev, 4] = rr
+                    EV[n_ev, 5] = force
+                    n_ev += 1
+                    count += 1
+                    last = e
+                    _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKC, acc)
+                    toggled += 1
+            if count > max_events:
+                x[:n] = q
+                x[n:] = v
+                return 2, k, n_ev, last
+            if toggled >= REFRESH:  # rounding of the updates, rebuilt from scratch
+                _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+                toggled = 0
+        k += 1
+        for i in range(n):
+            X[k, i] = q[i]
+            X[k, n + i] = v[i]
+        for e in range(nc):
+            S[k, e] = s[e]
+    x[:n] = q
+    x[n:] = v
+    return 0, k, n_ev, -1
+
+
+def spectral_bound_all(system) -> float:
+    """A bound of the spectral radius of ``A_s`` valid for every contact state ``s``, 1/s.
+
+    As :meth:`PiecewiseLinearSystem.spectral_bound` (``|lam| <= (c + sqrt(c^2 + 4 k)) / 2``
+    with ``k >= |L^-1 K_s L^-T|``, ``c >= |L^-1 C_s L^-T|``), with ``k`` and ``c`` bounded over
+    all states: for symmetric always-active matrices the contacts add positive semidefinite
+    terms, so the extreme eigenvalues of every state lie between those of the all-open and the
+    all-closed state; otherwise the triangle inequality over the contacts."""
+    n = system.n
+    if n == 0:
+        return 0.0
+    Li = system.Linv
+    nc = system.n_contacts
+    closed = np.ones(nc, dtype=bool)
+
+    def sym(A):
+        return np.allclose(A, A.T, rtol=0, atol=1e-12 * np.abs(A).max(initial=1e-300))
+
+    K1, C1, _ = system.matrices(closed)
+    K0, C0 = system.K0, system.C0
+    Kh0, Kh1 = Li @ K0 @ Li.T, Li @ K1 @ Li.T
+    Ch0, Ch1 = Li @ C0 @ Li.T, Li @ C1 @ Li.T
+    Wl = system.W @ Li.T  # rows L^-1 w_e
+    w2 = np.einsum("ij,ij->i", Wl, Wl)
+    pos_k = bool(np.all(system.k >= 0))
+    pos_c = bool(np.all(system.c >= 0))
+    if sym(Kh0) and pos_k:
+        e0 = np.linalg.eigvalsh(0.5 * (Kh0 + Kh0.T))
+        e1 = np.linalg.eigvalsh(0.5 * (Kh1 + Kh1.T))
+        k = float(max(abs(e0[0]), abs(e1[-1]), abs(e1[0]), abs(e0[-1])))
+    else:
+        k = float(np.linalg.norm(Kh0, 2) + np.sum(np.abs(system.k) * w2))
+    if sym(Ch0) and pos_c:
+        e0 = np.linalg.eigvalsh(0.5 * (Ch0 + Ch0.T))
+        e1 = np.linalg.eigvalsh(0.5 * (Ch1 + Ch1.T))
+        c = float(max(abs(e0[0]), abs(e1[-1]), abs(e1[0]), abs(e0[-1])))
+    else:
+        c = float(np.linalg.norm(Ch0, 2) + np.sum(np.abs(system.c) * w2))
+    return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
+
+
+class TaylorIntegrator:
+    """Per frozen system: the arrays of :func:`taylor_run` (built once, reused by callers that
+    advance one system in several calls)."""
+
+    def __init__(self, system, dt: float, max_events_per_step: int = 200,
+                 reach: float = REACH, n_terms: int | None = None):
+        self.sys = system
+        self.dt = float(dt)
+        self.max_events = int(max_events_per_step)
+        Minv = system.Minv
+        self.MK0 = np.ascontiguousarray(Minv @ system.K0)
+        self.MC0 = np.ascontiguousarray(Minv @ system.C0)
+        self.U = np.ascontiguousarray(system.W @ Minv.T)  # rows M^-1 w_e (Minv symmetric)
+        self.rho = max(spectral_bound_all(system), 1e-300)
+        self.n_terms = int(n_terms) if n_terms else terms_for(reach)
+        self.n_short = min(terms_for(0.25 * reach), self.n_terms)
+        self.h_max = min(reach / self.rho, self.dt)
+        self.MinvU = np.ascontiguousarray(system.MinvU)
+
+    def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray):
+        """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`)."""
+        from ..errors import ModelError
+        from .exact import GRAZE_MARGIN, SIMULTANEOUS, TAYLOR_SAMPLES
+
+        sysm = self.sys
+        X = np.empty((n_steps + 1, 2 * sysm.n))
+        S = np.empty((n_steps + 1, sysm.n_contacts), dtype=bool)
+        X[0], S[0] = x0, s0
+        x = np.array(x0, dtype=float)
+        s = np.array(s0, dtype=bool)
+        EV = np.empty((max(64, 4 * (self.max_events + sysm.n_contacts + 1)), 6))
+        k, n_ev = 0, 0
+        counts = np.zeros(3, dtype=np.int64)
+        while True:
+            status, k, n_ev, contact = taylor_run(
+                self.MK0, self.MC0, self.U, sysm.W, sysm.k, sysm.c, sysm.offset, self.MinvU,
+                F, x, s, k, n_steps, self.dt, self.h_max, self.n_terms, self.n_short, GRAZE_MARGIN,
+                TAYLOR_SAMPLES, SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts)
+            if status == 0:
+                break
+            if status == 1:
+                EV = np.concatenate([EV, np.empty_like(EV)])
+                continue
+            raise ModelError(
+                "max_events_per_step",
+                f"more than {self.max_events} contact-state changes inside one step "
+                f"ending near t = {(k + 1) * self.dt:.9g} s, last at contact "
+                f"{sysm.names[int(contact)]!r} (tooth chatter or a Zeno sequence); reduce dt, "
+                "add damping, or raise max_events_per_step")
+        ev = EV[:n_ev]
+        events = [(float(r[0]), int(r[1]), bool(r[2]), bool(r[3]), float(r[4]), float(r[5]))
+                  for r in ev]
+        self.counts = {"pieces": int(counts[0]), "halved": int(counts[1]),
+                       "root_searches": int(counts[2])}
+        return X, S, events

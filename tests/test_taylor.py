@@ -1,0 +1,137 @@
+"""The Taylor propagator of the exact method (gearmodal/integrate/taylor.py): its root
+isolation, its spectral bound, its safety net for stiff states and its agreement with the
+exponential propagator."""
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gearmodal as gm
+from gearmodal.errors import ModelError
+from gearmodal.integrate.system import PiecewiseLinearSystem
+from gearmodal.integrate.taylor import DEPTH, TaylorIntegrator, first_root, spectral_bound_all
+
+sys.path.insert(0, str(Path(__file__).parent / "validation"))
+from test_exactness import clearance_stage  # noqa: E402
+
+STAGE_LOADS = {"carrier.force_u": 2e3, "sun.force_u": -2e3, "carrier.force_y": -3e3}
+
+
+def root(coef):
+    coef = np.asarray(coef, dtype=float)
+    return first_root(coef, np.empty((DEPTH + 5, len(coef))), np.empty((2, DEPTH + 1)))
+
+
+def first_crossing_numpy(coef):
+    """Reference: the smallest real root in [0, 1] where the polynomial goes from <= 0 to
+    > 0 (numpy's companion-matrix roots, checked by the sign just after)."""
+    r = np.roots(coef[::-1])
+    r = np.sort(r[(np.abs(r.imag) < 1e-9) & (r.real >= 0) & (r.real <= 1)].real)
+    for x in r:
+        if np.polyval(coef[::-1], min(x + 1e-7, 1.0)) > 0:
+            return x
+    return math.inf
+
+
+def test_first_root_matches_numpy_on_random_polynomials():
+    """Degree 12 polynomials with decaying coefficients (as the scaled Taylor rows are):
+    the first upward crossing agrees with numpy's roots to 1e-9 (numpy's companion matrix is
+    the less accurate of the two), and "no crossing" agrees."""
+    rng = np.random.default_rng(3)
+    found = 0
+    for _ in range(300):
+        k = np.arange(13)
+        c = rng.standard_normal(13) * 4.0**k / np.array([math.factorial(j) for j in k])
+        c[0] = -abs(c[0])
+        ours, ref = root(c), first_crossing_numpy(c)
+        if math.isinf(ref):
+            assert math.isinf(ours)
+        else:
+            found += 1
+            assert ours == pytest.approx(ref, abs=1e-9)
+            assert np.polyval(c[::-1], ours) > 0  # the returned point is past the crossing
+    assert found > 50
+
+
+def test_first_root_finds_a_graze_and_rejects_a_near_miss():
+    """g = -(tau - 0.3)^2 + eps: positive only on 0.3 -+ sqrt(eps). With eps = 1e-12 the bump
+    is 2e-6 wide (no sampling would see it); with eps = -1e-12 it stays below zero. The root
+    is ill-conditioned: g is evaluated to ~1e-17 against a slope of 2e-6, so 1e-11."""
+    for eps, expect in ((1e-12, 0.3 - 1e-6), (-1e-12, math.inf)):
+        c = [-0.09 + eps, 0.6, -1.0]
+        r = root(c)
+        if math.isinf(expect):
+            assert math.isinf(r)
+        else:
+            assert r == pytest.approx(expect, abs=1e-11)
+
+
+def test_spectral_bound_holds_for_every_contact_state():
+    system = PiecewiseLinearSystem(gm.assemble(clearance_stage()), speed_rpm=0.0)
+    bound = spectral_bound_all(system)
+    rng = np.random.default_rng(0)
+    worst = 0.0
+    for _ in range(40):
+        s = rng.random(system.n_contacts) < 0.5
+        A, _ = system.first_order(s)
+        worst = max(worst, np.abs(np.linalg.eigvals(A)).max())
+    A, _ = system.first_order(np.ones(system.n_contacts, dtype=bool))
+    assert np.abs(np.linalg.eigvals(A)).max() <= bound
+    assert worst <= bound
+    assert bound < 1.5 * np.abs(np.linalg.eigvals(A)).max()  # and it is not loose
+
+
+def _stage_run(**options):
+    return gm.simulate(clearance_stage(), 0.004, dt=4e-5, loads=STAGE_LOADS, **options)
+
+
+def test_taylor_and_expm_propagators_agree_on_the_double_contact_stage():
+    """Two exact propagations of the same trajectory (310 events, double contact): the same
+    events to 1e-13 s and the same states to rounding amplified by the problem (~1e-13)."""
+    a = _stage_run(propagator="taylor")
+    b = _stage_run(propagator="expm")
+    assert len(a.events) == len(b.events) > 300
+    assert (a.events.contact == b.events.contact).all()
+    np.testing.assert_allclose(a.events.time, b.events.time, rtol=0, atol=1e-13)
+    scale = np.abs(b.q.to_numpy()).max()
+    assert np.abs(a.q.to_numpy() - b.q.to_numpy()).max() < 1e-10 * scale
+    assert a.stats["pieces"] >= len(a.events)
+    assert b.stats["exponentials"] > 0
+
+
+def test_an_underestimated_bound_is_rescued_by_halving():
+    """Pieces 20 times too long for the series' terms (as if a state were stiffer than the
+    bound): the tail check halves them until the series converges; the result is unchanged."""
+    system = PiecewiseLinearSystem(gm.assemble(clearance_stage()))
+    n = system.n
+    F = np.tile(np.zeros(n), (101, 1))
+    asm = system.asm
+    F += np.array([sum(asm.B[:, asm.load_names.index(k)] * v for k, v in STAGE_LOADS.items())])
+    x0, s0 = np.zeros(2 * n), np.zeros(system.n_contacts, dtype=bool)
+    good = TaylorIntegrator(system, 4e-5)
+    X1, _, ev1 = good.run(100, F, x0, s0)
+    bad = TaylorIntegrator(system, 4e-5, reach=40.0, n_terms=good.n_terms)
+    X2, _, ev2 = bad.run(100, F, x0, s0)
+    assert bad.counts["halved"] > 20
+    assert len(ev1) == len(ev2)
+    assert np.abs(X1 - X2).max() < 1e-10 * np.abs(X1).max()
+
+
+def test_event_buffer_grows_and_the_event_cap_names_the_contact():
+    """max_events_per_step sizes the event buffer; a run with more events than the initial
+    buffer grows it and loses nothing. Exceeding the cap inside one step raises."""
+    a = _stage_run()
+    b = _stage_run(max_events_per_step=12)  # buffer 4 * (12 + 17) rows < 310 events
+    assert len(b.events) == len(a.events)
+    assert (a.events.contact == b.events.contact).all()
+    np.testing.assert_allclose(a.events.time, b.events.time, rtol=0, atol=1e-13)
+    with pytest.raises(ModelError, match="max_events_per_step.*contact"):
+        _stage_run(max_events_per_step=1)
+
+
+def test_bad_propagator_is_named():
+    with pytest.raises(ModelError, match="propagator.*'taylor', 'expm'"):
+        _stage_run(propagator="rk4")
