@@ -97,23 +97,15 @@ def _toggle(U, W, kc, cc, off, e, sign, MKC, acc):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _coefficients(MKC, MinvU, acc, q, v, Fa, slope, h, B, y):
-    """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions by (T1); ``MKC`` is
-    ``[M^-1 K_s, M^-1 C_s]`` side by side (one contiguous product per term); ``y`` is scratch
-    of length 4 n (no allocation in the hot loop)."""
+def _coefficients(MKC, g0, g1, q, v, h, B, y):
+    """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions by (T1) with the forcing terms
+    ``g0``, ``g1``; ``MKC`` is ``[M^-1 K_s, M^-1 C_s]`` side by side (one contiguous product
+    per term); ``y`` is scratch of length 2 n (no allocation in the hot loop)."""
     n_terms, n = B.shape
-    m = MinvU.shape[1]
     h2 = h * h
     for i in range(n):
-        s0 = acc[i]
-        s1 = 0.0
-        for j in range(m):
-            s0 += MinvU[i, j] * Fa[j]
-            s1 += MinvU[i, j] * slope[j]
         B[0, i] = q[i]
         B[1, i] = v[i] * h
-        y[2 * n + i] = s0  # the forcing terms g_0, g_1 of (T1), added below
-        y[3 * n + i] = s1
     for k in range(n_terms - 2):
         den = 1.0 / ((k + 1.0) * (k + 2.0))
         c2 = -h2 * den
@@ -128,10 +120,10 @@ def _coefficients(MKC, MinvU, acc, q, v, Fa, slope, h, B, y):
             B[k + 2, i] = a
         if k == 0:
             for i in range(n):
-                B[2, i] += y[2 * n + i] * h2 * den
+                B[2, i] += g0[i] * h2 * den
         elif k == 1:
             for i in range(n):
-                B[3, i] += y[3 * n + i] * h2 * h * den
+                B[3, i] += g1[i] * h2 * h * den
 
 
 @numba.njit(cache=True)
@@ -166,15 +158,16 @@ def _evaluate(B, tau, h, q, v):
 
 
 @numba.njit(cache=True)
-def _gaps(W, off, s, q, v, g, r):
-    """Signed gaps (> 0: the contact must switch) and their rates."""
-    nc, n = W.shape
+def _gaps(wptr, widx, wval, off, s, q, v, g, r):
+    """Signed gaps (> 0: the contact must switch) and their rates (``W`` by sparse rows)."""
+    nc = off.shape[0]
     for e in range(nc):
         p = -off[e]
         rr = 0.0
-        for i in range(n):
-            p += W[e, i] * q[i]
-            rr += W[e, i] * v[i]
+        for jj in range(wptr[e], wptr[e + 1]):
+            i = widx[jj]
+            p += wval[jj] * q[i]
+            rr += wval[jj] * v[i]
         sg = -1.0 if s[e] else 1.0
         g[e] = sg * p
         r[e] = sg * rr
@@ -323,7 +316,8 @@ def first_root(coef, work, stk):
 
 
 @numba.njit(cache=True)
-def taylor_run(MK0, MC0, U, W, kc, cc, off, MinvU, F, x, s, k0, n_steps, dt, h_max,
+def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0, n_steps,
+               dt, h_max,
                n_terms, n_short, margin, n_samples, simultaneous, max_events, X, S, EV, n_ev,
                counts):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
@@ -354,10 +348,12 @@ def taylor_run(MK0, MC0, U, W, kc, cc, off, MinvU, F, x, s, k0, n_steps, dt, h_m
     coef = np.empty(n_terms)
     work = np.empty((DEPTH + 5, n_terms))
     stk = np.empty((2, DEPTH + 1))
-    ysc = np.empty(4 * n)
+    ysc = np.empty(2 * n)
     roots = np.empty(nc)
-    Fa = np.empty(F.shape[1])
-    slope = np.empty(F.shape[1])
+    gF = np.empty(n)
+    gS = np.empty(n)
+    g0 = np.empty(n)
+    m = F.shape[1]
     _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
     toggled = 0
     dense = False
@@ -370,10 +366,18 @@ def taylor_run(MK0, MC0, U, W, kc, cc, off, MinvU, F, x, s, k0, n_steps, dt, h_m
             return 1, k, n_ev, -1
         tk = k * dt
         t_end = tk + dt
-        for j in range(F.shape[1]):
-            slope[j] = (F[k + 1, j] - F[k, j]) / dt
+        # M^-1 F at the step start and its rate (first-order hold), once per step
+        for i in range(n):
+            a0 = 0.0
+            a1 = 0.0
+            for j in range(m):
+                a0 += MinvU[i, j] * F[k, j]
+                a1 += MinvU[i, j] * (F[k + 1, j] - F[k, j])
+            gF[i] = a0
+            gS[i] = a1 / dt
         t = tk
         count = 0
+        fresh = False  # ga, ra hold the gaps at (t, q, v) in state s
         while True:
             remaining = t_end - t
             if remaining <= 1e-13 * dt:
@@ -386,9 +390,9 @@ def taylor_run(MK0, MC0, U, W, kc, cc, off, MinvU, F, x, s, k0, n_steps, dt, h_m
             h = min(hm, remaining)
             if h < remaining and remaining - h < 1e-3 * hm:
                 h = 0.5 * remaining  # no sliver before the output time
-            for j in range(F.shape[1]):
-                Fa[j] = F[k, j] + slope[j] * (t - tk)
-            _coefficients(MKC, MinvU, acc, q, v, Fa, slope, h, Bv, ysc)
+            for i in range(n):
+                g0[i] = acc[i] + gF[i] + gS[i] * (t - tk)
+            _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
             counts[0] += 1
             while not _converged(Bv, TAIL):
                 counts[1] += 1
@@ -400,8 +404,9 @@ def taylor_run(MK0, MC0, U, W, kc, cc, off, MinvU, F, x, s, k0, n_steps, dt, h_m
                         Bv[kk, i] *= f
                     f *= 0.5
             _evaluate(Bv, 1.0, h, qb, vb)
-            _gaps(W, off, s, q, v, ga, ra)
-            _gaps(W, off, s, qb, vb, gb, rb)
+            if not fresh:
+                _gaps(wptr, widx, wval, off, s, q, v, ga, ra)
+            _gaps(wptr, widx, wval, off, s, qb, vb, gb, rb)
             # contacts whose gap has crossed by the end first (a certain root gives an early
             # bound), then those flagged as possible brief contacts, searched only up to it
             best = np.inf
@@ -419,8 +424,8 @@ def taylor_run(MK0, MC0, U, W, kc, cc, off, MinvU, F, x, s, k0, n_steps, dt, h_m
                     scale = 1.0
                     for kk in range(nt):
                         a = 0.0
-                        for i in range(n):
-                            a += W[e, i] * Bv[kk, i]
+                        for jj in range(wptr[e], wptr[e + 1]):
+                            a += wval[jj] * Bv[kk, widx[jj]]
                         coef[kk] = sg * a * scale
                         scale *= limit
                     coef[0] -= sg * off[e]
@@ -434,9 +439,14 @@ def taylor_run(MK0, MC0, U, W, kc, cc, off, MinvU, F, x, s, k0, n_steps, dt, h_m
                 for i in range(n):
                     q[i] = qb[i]
                     v[i] = vb[i]
+                for e in range(nc):
+                    ga[e] = gb[e]
+                    ra[e] = rb[e]
+                fresh = True
                 dense = False
                 continue
             _evaluate(Bv, best, h, q, v)
+            fresh = False
             dense = best * h < 0.25 * h_max
             t = t + best * h
             tol = simultaneous / h
@@ -534,6 +544,12 @@ class TaylorIntegrator:
         self.MK0 = np.ascontiguousarray(Minv @ system.K0)
         self.MC0 = np.ascontiguousarray(Minv @ system.C0)
         self.U = np.ascontiguousarray(system.W @ Minv.T)  # rows M^-1 w_e (Minv symmetric)
+        # the gap rows by their nonzeros (a mesh or bearing touches a few DOFs)
+        nz = [np.flatnonzero(w) for w in system.W]
+        self.wptr = np.concatenate([[0], np.cumsum([len(i) for i in nz])]).astype(np.int64)
+        self.widx = np.concatenate(nz + [np.empty(0, np.int64)]).astype(np.int64)
+        self.wval = np.ascontiguousarray(system.W[np.repeat(np.arange(len(nz)),
+                                                            [len(i) for i in nz]), self.widx])
         self.rho = max(spectral_bound_all(system), 1e-300)
         self.n_terms = int(n_terms) if n_terms else terms_for(reach)
         self.n_short = min(terms_for(0.25 * reach), self.n_terms)
@@ -556,9 +572,10 @@ class TaylorIntegrator:
         counts = np.zeros(3, dtype=np.int64)
         while True:
             status, k, n_ev, contact = taylor_run(
-                self.MK0, self.MC0, self.U, sysm.W, sysm.k, sysm.c, sysm.offset, self.MinvU,
-                F, x, s, k, n_steps, self.dt, self.h_max, self.n_terms, self.n_short, GRAZE_MARGIN,
-                TAYLOR_SAMPLES, SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts)
+                self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, sysm.k,
+                sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
+                self.n_terms, self.n_short, GRAZE_MARGIN, TAYLOR_SAMPLES,
+                SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts)
             if status == 0:
                 break
             if status == 1:
