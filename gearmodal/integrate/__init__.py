@@ -295,14 +295,17 @@ def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResu
         P[k0:k1 + 1] = X[k0:k1 + 1, :n] @ sy.W.T - sy.offset
         R[k0:k1 + 1] = X[k0:k1 + 1, n:] @ sy.W.T
     Fc = np.where(S, system.k * P + system.c * R, 0.0)
-    cols: dict[str, np.ndarray] = {}
+    # one column per mesh flank, one per bearing direction (its two dead-band sides combined)
+    names: dict[str, int] = {}
+    col, sign = np.empty(len(c.element), dtype=np.int64), np.ones(len(c.element))
     for e, (el, ct, kind) in enumerate(zip(c.element, c.contact, c.kind, strict=True)):
-        if kind == "mesh":
-            cols[f"{el}.{ct}"] = Fc[:, e]
-        else:
-            key = f"{el}.{ct[:-1]}"
-            sign = 1.0 if ct.endswith("+") else -1.0
-            cols[key] = cols.get(key, 0.0) + sign * Fc[:, e]
+        key = f"{el}.{ct}" if kind == "mesh" else f"{el}.{ct[:-1]}"
+        col[e] = names.setdefault(key, len(names))
+        if kind != "mesh" and not ct.endswith("+"):
+            sign[e] = -1.0
+    A = np.zeros((len(t), len(names)))
+    np.add.at(A.T, col, (Fc * sign).T)
+    blocks, labels = [A], list(names)
     sp = asm.springs
     if sp is not None and len(sp):
         Fs = np.empty((len(t), len(sp)))
@@ -310,9 +313,11 @@ def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResu
             w = sy.asm.springs.W
             Fs[k0:k1 + 1] = ((X[k0:k1 + 1, :n] @ w.T) * sp.stiffness
                              + (X[k0:k1 + 1, n:] @ w.T) * sp.damping)
-        for e, (el, ct) in enumerate(zip(sp.element, sp.contact, strict=True)):
-            cols[f"{el}.{ct}"] = Fs[:, e]
-    forces = pd.DataFrame(cols, index=q.index)
+        blocks.append(Fs)
+        labels += [f"{el}.{ct}" for el, ct in zip(sp.element, sp.contact, strict=True)]
+    forces = pd.DataFrame(np.concatenate(blocks, axis=1), index=q.index, columns=labels)
+    if forces.columns.duplicated().any():  # a spring and a dead band in one direction
+        forces = forces.T.groupby(level=0, sort=False).sum().T
     rows = [(te, c.element[e], c.contact[e], "closed" if b else "open",
              "closed" if a else "open", r, f) for te, e, b, a, r, f in events]
     ev = pd.DataFrame(rows, columns=EVENT_COLUMNS)

@@ -1,0 +1,268 @@
+"""Stability map: where each method fails at the extremes of DESIGN 3.3, and where ``exact`` holds.
+
+Usage::
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/stability_map.py [--quick] --out DIR
+
+Writes ``DIR/stability_map.csv`` (one row per case and method: the case's parameters,
+``method``, ``setting``, ``status``, ``energy_drift``, ``n_events``, ``n_events_exact``,
+``first_event_error``, ``cpu_s``, ``note``) and ``DIR/stability_map.md`` (the status table per
+case and method, pasted into ``benchmarks/RESULTS.md``).
+
+Cases (DESIGN 3.3), each run by every method:
+
+``rattle``
+    A free, undamped, unloaded 20/40 gear pair rattling in its backlash (both flanks) for 12
+    flight-contact cycles: mesh stiffness 1e6 .. 1e11 N/m, pinion mass 0.1 .. 1e5 kg (wheel 4x,
+    inertias of solid discs), backlash 0 .. 1e-3 m. The energy must stay constant.
+``chatter``
+    The same pair pressed by a mean torque with a 2 kHz torque ripple large enough to throw the
+    teeth apart every cycle, 1e8 N/m, 1 kg, backlash 1e-6 m: tens of switches per output step.
+``clearance``
+    A 2 kg planar body in a bearing dead band of 1e-9 .. 1e-3 m (1e9 N/m), bouncing in y with an
+    oscillating x force: many switches, no energy conservation (loaded), checked against exact.
+``speed``
+    An undamped, unloaded Lin & Parker stage (3 planets, backlash 2 um) at 0 .. 3000 rpm
+    carrier speed (gyroscopic and centripetal terms), started with a sun velocity: the energy
+    (centripetal terms act as springs) must stay constant.
+
+Methods and settings: ``exact`` with both propagators (``taylor``, ``expm``) at the case's
+``dt``; ``newmark`` at the same ``dt`` and at ``dt / 16``; ``scipy`` RK45 and Radau at rtol
+1e-6 (``atol`` 1e-12 of the state scale).
+
+Status, first match wins: ``error`` (the method raised: message in ``note``), ``timeout`` (CPU
+over ``--budget-s``, run in a subprocess and killed), ``nan`` (non-finite state), ``blowup``
+(energy grew by more than 10x, or a displacement beyond 1e3 x the exact run's largest),
+``energy`` (conservative cases: relative energy drift above 1e-6), ``missed_events`` (event
+count differs from exact's by more than 2 % or the first event time by more than 1 % of the
+case's contact duration), else ``ok``. ``exact`` is the reference for the event counts, so its
+own status reports only error/timeout/nan/blowup/energy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import multiprocessing as mp
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+import gearmodal as gm  # noqa: E402
+from gearmodal.integrate.system import PiecewiseLinearSystem  # noqa: E402
+
+ENERGY_TOL = 1e-6
+BLOWUP = 10.0
+
+
+# -- cases ----------------------------------------------------------------------------------
+def _pair(mass, k, backlash, damping=0.0):
+    p = gm.Gear(20, 0.004, math.radians(20), mass=mass, inertia=mass * 0.0376**2 / 2)
+    w = gm.Gear(40, 0.004, math.radians(20), mass=4 * mass, inertia=4 * mass * 0.0752**2 / 2)
+    return gm.gear_pair(p, w, mesh_stiffness=k, backlash=backlash, mesh_damping=damping)
+
+
+def rattle_case(k, mass, backlash):
+    m = _pair(mass, k, backlash)
+    rp, rw = m.bodies["pinion"].base_radius, m.bodies["wheel"].base_radius
+    ip, iw = m.bodies["pinion"].inertia, m.bodies["wheel"].inertia
+    me = 1.0 / (rp**2 / ip + rw**2 / iw)
+    contact = math.pi / math.sqrt(k / me)
+    v = 1e-2
+    flight = max(backlash / v, contact)
+    dt = min(flight, contact) / 4
+    return dict(model=m, t_end=12 * (flight + contact), dt=dt, contact_s=contact,
+                conservative=True, loads=None,
+                q0={"pinion.theta": -backlash / 2 / rp},
+                v0={"pinion.theta": v / rp, "wheel.theta": v / rp * ip * rw / (iw * rp)})
+
+
+def chatter_case():
+    m = _pair(1.0, 1e8, 1e-6)
+    ip = m.bodies["pinion"].inertia
+    rp = m.bodies["pinion"].base_radius
+    me_contact = math.pi / math.sqrt(1e8 / (ip / rp**2))
+    amp = 40.0  # N m at 2 kHz: an acceleration swing far beyond the backlash per cycle
+    return dict(model=m, t_end=5e-3, dt=1e-4, contact_s=me_contact, conservative=False,
+                loads={"pinion.torque": lambda t: 2.0 + amp * math.sin(2 * math.pi * 2000 * t)},
+                q0=None, v0=None)
+
+
+def clearance_case(clearance):
+    m = gm.Model("block", input="body")
+    m.add(gm.RigidBody(name="body", mass=2.0, inertia=1.0, dofs="planar"))
+    m.add(gm.Bearing("b", "body", None, stiffness={"x": 1e9, "y": 1e9, "theta": 1e4},
+                     clearance={"x": clearance, "y": clearance}))
+    contact = math.pi / math.sqrt(1e9 / 2.0)
+    return dict(model=m, t_end=0.05, dt=1e-4, contact_s=contact, conservative=False,
+                loads={"body.force_x": lambda t: 1e3 * math.sin(60 * t)}, q0=None,
+                v0={"body.y": 0.05})
+
+
+def speed_case(rpm):
+    lp = dict(mass={"carrier": 5.43, "ring": 2.35, "sun": 0.4, "planet": 0.66},
+              inertia_over_r2={"carrier": 6.29, "ring": 3.0, "sun": 0.39, "planet": 0.61},
+              bearing={"carrier": 1e8, "ring": 1e8, "sun": 1e8, "planet": 1e8},
+              torsional={"carrier": 1e6, "ring": 1e9, "sun": 1e6},
+              mesh={"sun_planet": 5e8, "ring_planet": 5e8})
+    m = gm.lin_parker_stage(3, **lp, pressure_angle=math.radians(24.6), backlash=2e-6)
+    contact = math.pi / math.sqrt(5e8 / 0.66)
+    return dict(model=m, t_end=2e-3, dt=2e-5, contact_s=contact, conservative=True, loads=None,
+                q0=None, v0={"sun.u": 0.01, "sun.x": 0.005}, speed_rpm=float(rpm))
+
+
+def cases(quick: bool) -> dict:
+    out = {}
+    ks = [1e6, 1e8, 1e11] if not quick else [1e6, 1e11]
+    masses = [0.1, 1.0, 1e5] if not quick else [0.1, 1e5]
+    backlashes = [0.0, 1e-6, 1e-3] if not quick else [0.0, 1e-3]
+    for k in ks:
+        for mass in masses:
+            for b in backlashes:
+                out[f"rattle k={k:g} m={mass:g} b={b:g}"] = (rattle_case, (k, mass, b),
+                                                            dict(k=k, mass=mass, backlash=b))
+    out["chatter k=1e8 m=1 b=1e-06"] = (chatter_case, (), dict(k=1e8, mass=1.0, backlash=1e-6))
+    for c in ([1e-9, 1e-6, 1e-3] if not quick else [1e-9, 1e-3]):
+        out[f"clearance c={c:g}"] = (clearance_case, (c,), dict(clearance=c))
+    for rpm in ([0, 1000, 3000] if not quick else [0, 3000]):
+        out[f"speed {rpm} rpm"] = (speed_case, (rpm,), dict(speed_rpm=rpm))
+    return out
+
+
+def methods(dt):
+    return [("exact", "taylor", dict(method="exact", propagator="taylor")),
+            ("exact", "expm", dict(method="exact", propagator="expm")),
+            ("newmark", "dt", dict(method="newmark")),
+            ("newmark", "dt/16", dict(method="newmark", dt=dt / 16)),
+            ("scipy", "RK45 rtol=1e-6", dict(method="scipy", scipy_method="RK45", rtol=1e-6)),
+            ("scipy", "Radau rtol=1e-6", dict(method="scipy", scipy_method="Radau",
+                                              rtol=1e-6))]
+
+
+# -- one run in a subprocess (killed on timeout) ---------------------------------------------
+def _run(conn, case_name, opts):
+    try:
+        fn, args, _ = cases(False)[case_name]  # the quick cases are a subset
+        c = fn(*args)
+        kw = dict(opts)
+        dt = kw.pop("dt", c["dt"])
+        t0 = time.process_time()
+        sim = gm.simulate(c["model"], c["t_end"], dt=dt, loads=c["loads"], q0=c["q0"],
+                          v0=c["v0"], speed_rpm=c.get("speed_rpm", 0.0), **kw)
+        cpu = time.process_time() - t0
+        S = PiecewiseLinearSystem(c["model"].assemble(), c.get("speed_rpm", 0.0))
+        x = np.concatenate([sim.q.to_numpy(), sim.v.to_numpy()], axis=1)
+        E = np.array([S.energy(xx) for xx in x]) if np.all(np.isfinite(x)) else None
+        conn.send(dict(ok=True, cpu_s=cpu, q=sim.q.to_numpy()[:: max(1, int(round(c["dt"] / dt)))],
+                       E=E, events=sim.events.time.to_numpy(), contact_s=c["contact_s"],
+                       conservative=c["conservative"]))
+    except Exception as exc:  # a failing method is a result
+        conn.send(dict(ok=False, note=f"{type(exc).__name__}: {exc}"[:300]))
+
+
+def run_one(case_name, opts, budget_s):
+    parent, child = mp.Pipe(duplex=False)
+    p = mp.get_context("fork").Process(target=_run, args=(child, case_name, opts))
+    t0 = time.perf_counter()
+    p.start()
+    child.close()
+    res = None
+    if parent.poll(budget_s):
+        try:
+            res = parent.recv()
+        except EOFError:
+            res = dict(ok=False, note="the run died")
+    p.join(timeout=1.0)
+    if p.is_alive():
+        p.kill()
+        p.join()
+    if res is None:
+        res = dict(ok=False, timeout=True, note=f"over {budget_s:g} s (wall "
+                   f"{time.perf_counter() - t0:.0f} s)")
+    return res
+
+
+def classify(res, ref):
+    if not res["ok"]:
+        return ("timeout" if res.get("timeout") else "error"), None
+    q = res["q"]
+    if not np.all(np.isfinite(q)):
+        return "nan", None
+    drift = None
+    if res["E"] is not None:
+        E = res["E"]
+        e0 = max(abs(E[0]), 1e-300)
+        drift = float((E.max() - E.min()) / max(np.abs(E).max(), 1e-300))
+        if E.max() > BLOWUP * e0 and res["conservative"]:
+            return "blowup", drift
+    if ref is not None and ref["ok"] and np.all(np.isfinite(ref["q"])):
+        big = np.abs(ref["q"]).max()
+        if big > 0 and np.abs(q).max() > 1e3 * big:
+            return "blowup", drift
+    if res["conservative"] and drift is not None and drift > ENERGY_TOL:
+        return "energy", drift
+    if ref is not None and ref is not res and ref["ok"]:
+        n, nr = len(res["events"]), len(ref["events"])
+        if abs(n - nr) > max(0.02 * nr, 0):
+            return "missed_events", drift
+        if nr and abs(res["events"][0] - ref["events"][0]) > 0.01 * res["contact_s"]:
+            return "missed_events", drift
+    return "ok", drift
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="the corners only, fewer settings")
+    ap.add_argument("--out", required=True, type=Path)
+    ap.add_argument("--budget-s", type=float, default=None,
+                    help="CPU budget per run before it counts as a timeout (default 20 s, 8 s "
+                    "quick)")
+    args = ap.parse_args(argv)
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    budget = args.budget_s or (8.0 if args.quick else 20.0)
+    gm.simulate(_pair(1.0, 1e8, 1e-4), 1e-3, dt=1e-4, v0={"pinion.theta": 1.0})  # compile
+    rows = []
+    wall0 = time.perf_counter()
+    for name, (fn, fargs, params) in cases(args.quick).items():
+        dt = fn(*fargs)["dt"]
+        ref = None
+        for method, setting, opts in methods(dt):
+            res = run_one(name, opts, budget)
+            if method == "exact" and setting == "taylor":
+                ref = res
+            status, drift = classify(res, ref if (method, setting) != ("exact", "taylor")
+                                     else None)
+            ev = res.get("events")
+            ev_ref = None if ref is None else ref.get("events")
+            first_err = (abs(ev[0] - ev_ref[0]) / res["contact_s"] if ev is not None and
+                         ev_ref is not None and len(ev) and len(ev_ref) else None)
+            rows.append(dict(case=name, **params, method=method, setting=setting,
+                             status=status, energy_drift=drift,
+                             n_events=None if ev is None else len(ev),
+                             n_events_exact=None if ev_ref is None else len(ev_ref),
+                             first_event_error=first_err,
+                             cpu_s=res.get("cpu_s"), note=res.get("note", "")))
+            print(f"{time.perf_counter() - wall0:7.1f}s {name:32s} {method:7s} {setting:16s} "
+                  f"{status:13s} drift {drift if drift is not None else float('nan'):9.2g} "
+                  f"events {rows[-1]['n_events']} / {rows[-1]['n_events_exact']} "
+                  f"{res.get('note', '')[:60]}", flush=True)
+    df = pd.DataFrame(rows)
+    df.to_csv(out / "stability_map.csv", index=False)
+    df["label"] = df.method + " " + df.setting
+    table = df.pivot(index="case", columns="label", values="status")
+    table = table.loc[list(dict.fromkeys(df.case)), list(dict.fromkeys(df.label))]
+    (out / "stability_map.md").write_text(table.to_markdown() + "\n")
+    print(table.to_string())
+
+
+if __name__ == "__main__":
+    main()
