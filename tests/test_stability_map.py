@@ -1,0 +1,33 @@
+"""The stability-map benchmark's classification (benchmarks/stability_map.py) on two corners
+whose outcome is known: the exact method conserves the energy of an undamped rattle, Newmark
+with a step longer than the contact does not, and the event count tells missed contacts."""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+
+import stability_map as sm  # noqa: E402
+
+
+def test_exact_holds_where_newmark_fails():
+    name = "rattle k=1e+08 m=1 b=0.001"
+    exact = sm.run_one(name, dict(method="exact", propagator="taylor"), budget_s=60)
+    status, drift, _ = sm.classify(exact, None)
+    # undamped: conserved to rounding, ~1e-16 per piece over ~1e4 pieces of rho h <= 2
+    assert status == "ok" and drift < 1e-10
+    newmark = sm.run_one(name, dict(method="newmark"), budget_s=60)
+    status, drift, traj = sm.classify(newmark, exact)
+    # dt = 1/40 of a 0.1 s flight is 2.5 ms, 5x the 0.5 ms contact: the step-end switch
+    # penetrates deep and the energy jumps at every impact
+    assert status in ("energy", "blowup") and drift > 1e-3
+    assert traj > 1e-2
+
+
+def test_chatter_counts_events_against_exact():
+    name = "chatter k=1e8 m=1 b=1e-06"
+    exact = sm.run_one(name, dict(method="exact"), budget_s=60)
+    fine = sm.run_one(name, dict(method="scipy", scipy_method="RK45", rtol=1e-6), budget_s=60)
+    assert sm.classify(fine, exact)[0] == "ok"
+    coarse = sm.run_one(name, dict(method="newmark"), budget_s=60)
+    assert sm.classify(coarse, exact)[0] == "missed_events"
