@@ -223,6 +223,12 @@ def _centre(model: Model, body, azimuth: float) -> np.ndarray:
     return _rz(frame.speed_ratio * azimuth) @ np.asarray(body.position, dtype=float)
 
 
+def _acts(w: np.ndarray) -> bool:
+    """Whether a gap or joint row acts on any coordinate: entries are lever arms and direction
+    cosines (m or 1), so anything below 1e-12 is the rounding of a cancelled term."""
+    return bool(np.abs(w).max(initial=0.0) > 1e-12)
+
+
 def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     """Assemble ``model`` at input azimuth ``azimuth`` (rad; geometry of frames turning against
     each other is frozen there). Returns an :class:`Assembly`.
@@ -302,30 +308,45 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
                             "mesh")
 
     # Bearings, supports and shafts with per-direction dead bands (DESIGN 2.3).
-    for br in model.bearings.values():
+    def bearing_jacobians(br, az, T_, centres_):
         a = model.bodies[br.a]
         b = model.bodies[br.b] if br.b is not None else None
         fa = model.frames[a.frame]
-        pa = _rz(fa.speed_ratio * azimuth) @ np.asarray(br.at, dtype=float)
-        cb = centres[b.name] if b is not None else np.zeros(3)
-        pb = centres[a.name] + pa - cb
+        pa = _rz(fa.speed_ratio * az) @ np.asarray(br.at, dtype=float)
+        cb = centres_[b.name] if b is not None else np.zeros(3)
+        pb = centres_[a.name] + pa - cb
         axes_frame = br.axes_frame or (b.frame if b is not None else GROUND)
-        gamma = model.frames[axes_frame].speed_ratio * azimuth + br.axes_angle
+        gamma = model.frames[axes_frame].speed_ratio * az + br.axes_angle
         Ga, Gb = joint_gradients(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2], gamma)
         Ja, Jb = bearing_gap_jacobians(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2], gamma)
+
+        def row(Ra, Rb, j):
+            w = np.zeros(n)
+            w[slices[a.name]] += Ra[j] @ T_[a.name]
+            if b is not None:
+                w[slices[b.name]] += Rb[j] @ T_[b.name]
+            return w
+        return lambda j: row(Ga, Gb, j), lambda j: row(Ja, Jb, j)
+
+    # A direction that acts on no DOF present at these levels is left out; whether it acts is
+    # decided at this azimuth and at a generic one, so that every azimuth of a turning frame
+    # gives the same rows (a torsional carrier's pin moves along x except where sin = 0)
+    probe = azimuth + 1.2345678901
+    T2 = {b.name: _body_transform(model, b, probe) for b in bodies}
+    centres2 = {b.name: _centre(model, b, probe) for b in bodies}
+    for br in model.bearings.values():
+        spring_row, gap_row = bearing_jacobians(br, azimuth, T, centres)
+        spring_row2, gap_row2 = bearing_jacobians(br, probe, T2, centres2)
         for key, k in br.stiffness.items():
             i = DIRECTIONS.index(key)
             c = br.damping.get(key, 0.0)
             gap = br.clearance.get(key, 0.0)
             if gap == 0.0:
                 # no dead band: a linear spring on the joint deflection g_i
-                w = np.zeros(n)
-                w[slices[a.name]] += Ga[i] @ T[a.name]
-                if b is not None:
-                    w[slices[b.name]] += Gb[i] @ T[b.name]
+                w = spring_row(i)
                 K += k * np.outer(w, w)
                 C += c * np.outer(w, w)
-                if np.any(w):
+                if _acts(w) or _acts(spring_row2(i)):
                     lin_rows.append(w)
                     lin_k.append(k)
                     lin_c.append(c)
@@ -333,11 +354,8 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
                     lin_dir.append(key)
                 continue
             for j, side in ((2 * i, "+"), (2 * i + 1, "-")):
-                w = np.zeros(n)
-                w[slices[a.name]] += Ja[j] @ T[a.name]
-                if b is not None:
-                    w[slices[b.name]] += Jb[j] @ T[b.name]
-                if np.any(w):  # else the direction acts on no DOF present at these levels
+                w = gap_row(j)
+                if _acts(w) or _acts(gap_row2(j)):
                     add_contact(w, gap, k, c, side == "+", br.name, f"{key}{side}",
                                 "bearing")
 

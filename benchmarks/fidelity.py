@@ -1,0 +1,157 @@
+"""The fidelity ladder on the paper's ``clearance`` case: what each rung costs and how far its
+engineering quantities move.
+
+Usage::
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/fidelity.py [--quick] --out DIR
+
+The case is the double-contact study's ``clearance`` gearbox (``studies/double_contact.py``:
+the 600 kW turbine scene ``studies/scenes/600kw_turbine_10ms.toml``, 10 m/s TI 0.12 wind,
+seed 1, carrier bearing 1e8 N/m with 1 mm clearance per axis), 30 s from 6 rpm through cut-in
+(``--quick``: 15 s). Each rung changes one setting of the most detailed rung, ``reference``
+(geometry refrozen every 0.125 deg, output/propagation step 1 ms, ``method="exact"``), through
+the scene overrides of :func:`gearmodal.sweep` (cases stored in ``DIR/store``: an interrupted
+run resumes, a rerun with more rungs reuses the finished ones).
+
+Writes ``DIR/fidelity.csv``: one row per rung with ``rung``, ``knob``, ``setting``, ``cpu_s``,
+``n_dofs``, ``n_events``, the quantities engineers use (``max_front_force_N`` of planet 1,
+``max_planet_bearing_force_N``, ``double_contact_time_s``, ``peak_load_sharing_factor``), their
+relative errors against ``reference`` (``err_<quantity>``; the double-contact time's error is
+relative to the reference's too), and ``error`` for rungs that failed; and
+``DIR/fidelity.png`` (error against CPU time per quantity).
+
+The rung ``floor`` is the reference with the initial rotor speed changed by 1e-13 relative, a
+perturbation at rounding level. The clearance case rattles chaotically after cut-in, so any
+change of setting moves single-run peaks by about as much as this perturbation does: a rung's
+error is meaningful only where it exceeds the floor's.
+
+Rungs not in the ladder yet (issue "fidelity ladder"): polygonal and round clearance,
+mesh-stiffness alternation. The DOF level of the gearbox stages is a rung (``stages_dofs``),
+listed when the model can be built at that level.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "studies"))
+
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+import gearmodal as gm  # noqa: E402
+from gearmodal.studies import summarize  # noqa: E402
+
+SCENE = ROOT / "studies" / "scenes" / "600kw_turbine_10ms.toml"
+QUANTITIES = ("max_front_force_N", "max_planet_bearing_force_N", "double_contact_time_s",
+              "peak_load_sharing_factor")
+REFERENCE = {"turbine.refreeze_deg": 0.125, "scene.dt": 1e-3}
+
+
+def fidelity_metrics(result) -> dict:
+    """The study's summary plus the gearbox's DOF count."""
+    out = summarize(result)
+    out["n_dofs"] = int(result.gearbox.q.shape[1])
+    return out
+
+
+def rungs(quick: bool) -> list[tuple[str, str, str, dict]]:
+    """(rung, knob, setting, overrides on top of the reference)."""
+    out = [("reference", "-", "refreeze 0.125 deg, dt 1 ms, exact (Taylor)", {}),
+           ("floor", "chaos floor", "rotor speed at start x (1 + 1e-13)",
+            {"turbine.rotor_speed0_rpm": 6.0 * (1 + 1e-13)})]
+    for deg in ((0.5, 1.0, 2.0) if quick else (0.25, 0.5, 1.0, 2.0, 4.0)):
+        out.append((f"refreeze_{deg:g}", "refreeze_deg", f"{deg:g} deg",
+                    {"turbine.refreeze_deg": deg}))
+    for dt in ((2e-3,) if quick else (2e-3, 4e-3)):
+        out.append((f"dt_{dt * 1e3:g}ms", "dt", f"{dt * 1e3:g} ms", {"scene.dt": dt}))
+    out.append(("newmark", "method", "newmark, dt 1 ms", {"scene.method": "newmark"}))
+    if not quick:
+        out.append(("newmark_0.25ms", "method", "newmark, dt 0.25 ms",
+                    {"scene.method": "newmark", "scene.dt": 2.5e-4}))
+    out.append(("study_default", "scene as the studies run it", "refreeze 1 deg, dt 2 ms",
+                {"turbine.refreeze_deg": 1.0, "scene.dt": 2e-3}))
+    for level in ("torsional",):
+        out.append((f"dofs_{level}", "stages_dofs", f"all stages {level}",
+                    {f"model.stages.{i}.dofs": level for i in range(3)}))
+    return out
+
+
+def plot(df: pd.DataFrame, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(QUANTITIES), figsize=(4.2 * len(QUANTITIES), 4.0))
+    ok = df[df["error"].isna()] if "error" in df else df
+    floor = ok[ok.rung == "floor"]
+    for ax, qn in zip(axes, QUANTITIES, strict=True):
+        col = f"err_{qn}"
+        d = ok[(ok.rung != "reference") & ok[col].notna()]
+        for r in d.itertuples():
+            e = max(getattr(r, col), 1e-6)
+            ax.loglog(r.cpu_s, e, "o", color="k" if r.rung != "floor" else "tab:red")
+            ax.annotate(r.rung, (r.cpu_s, e), fontsize=6, xytext=(3, 2),
+                        textcoords="offset points")
+        if len(floor) and np.isfinite(floor[col].iloc[0]):
+            ax.axhline(max(floor[col].iloc[0], 1e-6), color="tab:red", lw=0.8, ls="--",
+                       label="chaos floor")
+        ax.set_title(qn.replace("_", " "), fontsize=8)
+        ax.set_xlabel("CPU time [s]")
+        ax.set_ylabel("relative error vs reference")
+        ax.grid(True, lw=0.3)
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Fidelity ladder, paper's clearance case (benchmarks/fidelity.py)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="15 s runs, fewer rungs")
+    ap.add_argument("--out", required=True, type=Path)
+    ap.add_argument("--workers", type=int, default=2)
+    args = ap.parse_args(argv)
+    from double_contact import CLEARANCE
+
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    t_end = 15.0 if args.quick else 30.0
+    table = rungs(args.quick)
+    cases = [{"scene.t_end": t_end, "model.stages.0.carrier_bearing": CLEARANCE, **REFERENCE,
+              **over} for _, _, _, over in table]
+    t0 = time.perf_counter()
+    res = gm.sweep(str(SCENE), cases, store=out / "store", metrics=fidelity_metrics,
+                   max_workers=args.workers, errors="record")
+    res = res.reset_index(drop=True)
+    rows = []
+    for (name, knob, setting, _), (_, r) in zip(table, res.iterrows(), strict=True):
+        row = dict(rung=name, knob=knob, setting=setting, cpu_s=r.get("cpu_s"),
+                   n_dofs=r.get("n_dofs"), n_events=r.get("n_events"),
+                   **{q: r.get(q) for q in QUANTITIES},
+                   error=r.get("error") if isinstance(r.get("error"), str) else None)
+        rows.append(row)
+    df = pd.DataFrame(rows)
+    ref = df[df.rung == "reference"].iloc[0]
+    for q in QUANTITIES:
+        df[f"err_{q}"] = (df[q] - ref[q]).abs() / abs(ref[q]) if ref[q] else np.nan
+    df.to_csv(out / "fidelity.csv", index=False)
+    plot(df, out / "fidelity.png")
+    pd.set_option("display.width", 200)
+    print(df[["rung", "cpu_s", "n_dofs", "n_events", *QUANTITIES,
+              *[f"err_{q}" for q in QUANTITIES]]].to_string())
+    print(f"wrote {out / 'fidelity.csv'} and {out / 'fidelity.png'} "
+          f"({time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
