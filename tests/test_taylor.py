@@ -12,7 +12,15 @@ import pytest
 import gearmodal as gm
 from gearmodal.errors import ModelError
 from gearmodal.integrate.system import PiecewiseLinearSystem
-from gearmodal.integrate.taylor import DEPTH, TaylorIntegrator, first_root, spectral_bound_all
+from gearmodal.integrate.taylor import (
+    DEPTH,
+    N_TERMS,
+    REACH,
+    TaylorIntegrator,
+    first_root,
+    spectral_bound_all,
+    terms_for,
+)
 
 sys.path.insert(0, str(Path(__file__).parent / "validation"))
 from test_exactness import clearance_stage  # noqa: E402
@@ -113,6 +121,7 @@ def test_an_underestimated_bound_is_rescued_by_halving():
     x0, s0 = np.zeros(2 * n), np.zeros(system.n_contacts, dtype=bool)
     good = TaylorIntegrator(system, 4e-5)
     X1, _, ev1 = good.run(100, F, x0, s0)
+    assert good.n_terms == N_TERMS == terms_for(REACH)
     bad = TaylorIntegrator(system, 4e-5, reach=40.0, n_terms=good.n_terms)
     X2, _, ev2 = bad.run(100, F, x0, s0)
     assert bad.counts["halved"] > 20

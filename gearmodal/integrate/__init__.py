@@ -174,6 +174,8 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         else:
             seg_casm = casm
         system = PiecewiseLinearSystem(seg_asm, speed_rpm)
+        if system0 is not None and getattr(system0, "rho_bound", None) is not None:
+            system.rho_base = system0.rho_bound  # the geometry turned only (taylor.RHO_MARGIN)
         if system0 is None:
             system0 = system
             if casm is None:

@@ -20,10 +20,12 @@ part plus the closed contacts): a new contact state costs nothing like the augme
 exponential of :mod:`gearmodal.integrate.system`, which is what makes runs in which almost
 every event enters a new state (a carrier rattling in its clearance against three planets)
 cheap. Events are found as in :mod:`gearmodal.integrate.exact`: the end values and rates of
-each gap over a piece of at most half the fastest period flag candidates (a sign change or a
-Hermite interpolant reaching near contact), and a candidate's gap polynomial (the Taylor
-series of the exact solution, projected on the contact) is searched for its first root to
-machine precision (:func:`gearmodal.integrate.kernels.poly_first_root`).
+each gap over a piece of at most a third of the fastest period flag candidates (a sign change
+or a Hermite interpolant reaching near contact), and a candidate's gap polynomial (the Taylor
+series of the exact solution, projected on the contact) is searched for its first root by
+Bernstein subdivision (:func:`first_root`), which cannot miss a root of the polynomial, and
+located to adjacent floating-point numbers. Right after an event that came quickly, the next
+piece is a quarter as long with fewer terms (the next event is likely near).
 """
 
 from __future__ import annotations
@@ -38,10 +40,12 @@ from .kernels import _poly as _hpoly
 
 #: rho * (piece length) at most this: every modal component turns by at most 2 rad per piece
 REACH = 2.0
-#: terms of the series; REACH^N / N! = 2.7e-17
+#: terms of the series at REACH (``terms_for(REACH)``): REACH^N / N! = 2.7e-17
 N_TERMS = 24
 #: Bernstein subdivisions at most (intervals of 2^-DEPTH of a piece)
 DEPTH = 60
+#: a refrozen segment (same system, turned geometry) reuses the previous bound times this
+RHO_MARGIN = 1.25
 #: contact switches applied as rank-one updates before the state's matrices are rebuilt
 REFRESH = 64
 #: the last two scaled terms must be below this fraction of the largest one (the terms then
@@ -550,7 +554,16 @@ class TaylorIntegrator:
         self.widx = np.concatenate(nz + [np.empty(0, np.int64)]).astype(np.int64)
         self.wval = np.ascontiguousarray(system.W[np.repeat(np.arange(len(nz)),
                                                             [len(i) for i in nz]), self.widx])
-        self.rho = max(spectral_bound_all(system), 1e-300)
+        base = getattr(system, "rho_base", None)
+        if base:
+            # a refrozen segment of the same system (the geometry turned) passes its
+            # predecessor's bound instead of paying ~1 ms of eigenvalues per segment: used with
+            # RHO_MARGIN, and the series' tail check still halves any piece it makes too long
+            self.rho = RHO_MARGIN * float(base)
+            system.rho_bound = float(base)  # passed on as is: margins do not compound
+        else:
+            self.rho = max(spectral_bound_all(system), 1e-300)
+            system.rho_bound = self.rho
         self.n_terms = int(n_terms) if n_terms else terms_for(reach)
         self.n_short = min(terms_for(0.25 * reach), self.n_terms)
         self.h_max = min(reach / self.rho, self.dt)

@@ -316,7 +316,12 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                     asm.C[i_gen, i_gen] += c_gen  # the generator's tangent damping
                 if system is not None:  # a closed segment's propagators are not needed again
                     system.__dict__.pop("_exact_integrators", None)
+                prev_rho = getattr(system, "rho_bound", None)
                 system = PiecewiseLinearSystem(asm, om_f / RPM)
+                if prev_rho is not None and not (switched or drift):
+                    # a refreeze for the azimuth only turns the geometry: the spectrum moves
+                    # little, so the last bound serves (with taylor.RHO_MARGIN)
+                    system.rho_base = prev_rho
                 loads_j = {"rotor.torque": u[j, 0], carrier_x: u[j, 1], carrier_y: u[j, 2]}
                 if s is None:
                     # at the initial azimuth's exact geometry (the frozen segment with its
