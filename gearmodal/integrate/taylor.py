@@ -63,29 +63,6 @@ def terms_for(reach: float, tol: float = 3e-17) -> int:
 
 
 @numba.njit(cache=True)
-def _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc):
-    """``M^-1 K_s``, ``M^-1 C_s`` and ``M^-1 f_s`` of contact state ``s`` (rank-one sums of
-    ``u_e w_e^T``, ``u_e = M^-1 w_e``, over the closed contacts; system.matrices)."""
-    n = MK0.shape[0]
-    for i in range(n):
-        acc[i] = 0.0
-        for j in range(n):
-            MKC[i, j] = MK0[i, j]
-            MKC[i, n + j] = MC0[i, j]
-    for e in range(W.shape[0]):
-        if s[e]:
-            ke, ce, fe = kc[e], cc[e], kc[e] * off[e]
-            for i in range(n):
-                ui = U[e, i]
-                if ui != 0.0:
-                    acc[i] += fe * ui
-                    for j in range(n):
-                        wj = W[e, j]
-                        MKC[i, j] += ke * ui * wj
-                        MKC[i, n + j] += ce * ui * wj
-
-
-@numba.njit(cache=True)
 def _toggle(U, W, kc, cc, off, e, sign, MKC, acc):
     """Add (sign 1) or remove (sign -1) contact ``e``'s rank-one terms in place."""
     n = W.shape[1]
@@ -98,6 +75,21 @@ def _toggle(U, W, kc, cc, off, e, sign, MKC, acc):
                 wj = W[e, j]
                 MKC[i, j] += ke * ui * wj
                 MKC[i, n + j] += ce * ui * wj
+
+
+@numba.njit(cache=True)
+def _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc):
+    """``M^-1 K_s``, ``M^-1 C_s`` and ``M^-1 f_s`` of contact state ``s`` (rank-one sums of
+    ``u_e w_e^T``, ``u_e = M^-1 w_e``, over the closed contacts; system.matrices)."""
+    n = MK0.shape[0]
+    for i in range(n):
+        acc[i] = 0.0
+        for j in range(n):
+            MKC[i, j] = MK0[i, j]
+            MKC[i, n + j] = MC0[i, j]
+    for e in range(W.shape[0]):
+        if s[e]:
+            _toggle(U, W, kc, cc, off, e, 1.0, MKC, acc)
 
 
 @numba.njit(cache=True, fastmath=True)
