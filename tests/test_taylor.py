@@ -144,3 +144,11 @@ def test_event_buffer_grows_and_the_event_cap_names_the_contact():
 def test_bad_propagator_is_named():
     with pytest.raises(ModelError, match="propagator.*'taylor', 'expm'"):
         _stage_run(propagator="rk4")
+
+
+def test_first_root_ends_on_a_tangent_and_on_non_finite_input():
+    """A double root (tangent graze exactly at zero) and non-finite coefficients: the search
+    ends (found in review: subdivision ran to 1e-60 widths, and forever on NaN)."""
+    r = root([-0.09, 0.6, -1.0])  # -(tau - 0.3)^2: touches zero, never positive
+    assert math.isinf(r) or abs(r - 0.3) < 1e-7
+    assert math.isinf(root([-1.0, 0.0, 0.0, math.inf, 0.0, -math.inf]))
