@@ -317,9 +317,8 @@ def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResu
                              + (X[k0:k1 + 1, n:] @ w.T) * sp.damping)
         blocks.append(Fs)
         labels += [f"{el}.{ct}" for el, ct in zip(sp.element, sp.contact, strict=True)]
+    # a bearing direction is a spring or a dead band, never both: the labels are distinct
     forces = pd.DataFrame(np.concatenate(blocks, axis=1), index=q.index, columns=labels)
-    if forces.columns.duplicated().any():  # a spring and a dead band in one direction
-        forces = forces.T.groupby(level=0, sort=False).sum().T
     rows = [(te, c.element[e], c.contact[e], "closed" if b else "open",
              "closed" if a else "open", r, f) for te, e, b, a, r, f in events]
     ev = pd.DataFrame(rows, columns=EVENT_COLUMNS)

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ModelError
-from .kernels import advance_state, fast_steps
+from .kernels import GRAZE_MARGIN, SIMULTANEOUS, advance_state, fast_steps
 from .system import TAYLOR_TERMS, PiecewiseLinearSystem, Propagators
 from .taylor import TaylorIntegrator
 
@@ -32,13 +32,8 @@ from .taylor import TaylorIntegrator
 #: all in numba, no per-state setup) or "expm" (cached augmented exponentials per state)
 PROPAGATORS = ("taylor", "expm")
 
-#: a receding gap whose Hermite interpolant comes this close to contact (relative to the
-#: change of the gap over the piece) is examined for a hidden brief contact
-GRAZE_MARGIN = 0.25
 #: samples of the Taylor polynomial used to bracket the first root inside a Taylor piece
 TAYLOR_SAMPLES = 33
-#: crossings closer than this fraction of dt are switched together (symmetric planets)
-SIMULTANEOUS = 1e-13
 
 
 class ExactIntegrator:
@@ -123,6 +118,12 @@ class ExactIntegrator:
         return s
 
 
+def _check_finite(X: np.ndarray, dt: float) -> None:
+    if not np.all(np.isfinite(X)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(X), axis=1))[0])
+        raise ModelError("simulate", f"the solution is not finite at t = {bad * dt:.9g} s")
+
+
 def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
               x0: np.ndarray, s0: np.ndarray, max_events_per_step: int = 200,
               propagator: str = "taylor"):
@@ -144,32 +145,25 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     if propagator not in PROPAGATORS:
         raise ModelError("propagator", f"= {propagator!r}: must be one of "
                          + ", ".join(map(repr, PROPAGATORS)))
-    if propagator == "taylor":
-        key = ("taylor", float(dt), int(max_events_per_step))
-        cache = system.__dict__.setdefault("_exact_integrators", {})
-        integ = cache.get(key)
-        if integ is None:
-            integ = cache[key] = TaylorIntegrator(system, dt, max_events_per_step)
-        F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))
-        X, S, events = integ.run(n_steps, F_grid, x0, s0)
-        if not np.all(np.isfinite(X)):
-            bad = int(np.flatnonzero(~np.all(np.isfinite(X), axis=1))[0])
-            raise ModelError("simulate", f"the solution is not finite at t = {bad * dt:.9g} s")
-        return X, S, events, {"exponentials": 0, **integ.counts}
     # the propagators belong to the frozen system: callers that advance one system in several
-    # calls (the turbine co-simulation) keep its exponentials
-    key = (float(dt), int(max_events_per_step))
+    # calls (the turbine co-simulation) keep them
+    key = (propagator, float(dt), int(max_events_per_step))
     cache = system.__dict__.setdefault("_exact_integrators", {})
     integ = cache.get(key)
     if integ is None:
-        integ = cache[key] = ExactIntegrator(system, dt, max_events_per_step)
+        kind = TaylorIntegrator if propagator == "taylor" else ExactIntegrator
+        integ = cache[key] = kind(system, dt, max_events_per_step)
+    F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))  # input basis, if any
+    if propagator == "taylor":
+        X, S, events = integ.run(n_steps, F_grid, x0, s0)
+        _check_finite(X, dt)
+        return X, S, events, {"exponentials": 0, **integ.counts}
     prop = integ.prop
     n_exp0, n_states0 = prop.n_exponentials, len(prop._states)
     X = np.empty((n_steps + 1, 2 * system.n))
     S = np.empty((n_steps + 1, system.n_contacts), dtype=bool)
     X[0], S[0] = x0, s0
     x, s = x0.astype(float).copy(), s0.copy()
-    F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))  # input basis, if any
     events: list = []
     k = 0
     while k < n_steps:
@@ -188,9 +182,7 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         x, s = integ.advance(x, s, k * dt, (k + 1) * dt, F_grid[k], F_grid[k + 1], events)
         X[k + 1], S[k + 1] = x, s
         k += 1
-    if not np.all(np.isfinite(X)):
-        bad = int(np.flatnonzero(~np.all(np.isfinite(X), axis=1))[0])
-        raise ModelError("simulate", f"the solution is not finite at t = {bad * dt:.9g} s")
+    _check_finite(X, dt)
     stats = {"exponentials": prop.n_exponentials - n_exp0,
              "states": len(prop._states) - n_states0}
     return X, S, events, stats

@@ -13,6 +13,12 @@ import math
 import numba
 import numpy as np
 
+#: a receding gap whose Hermite interpolant comes this close to contact (relative to the
+#: change of the gap over the piece) is examined for a hidden brief contact (both propagators)
+GRAZE_MARGIN = 0.25
+#: crossings closer than this fraction of dt are switched together (symmetric planets)
+SIMULTANEOUS = 1e-13
+
 
 @numba.njit(cache=True)
 def hermite_max(g0, d0, g1, d1, L):

@@ -35,7 +35,8 @@ import math
 import numba
 import numpy as np
 
-from .kernels import _bisect_up, _dpoly, candidate
+from ..errors import ModelError
+from .kernels import GRAZE_MARGIN, SIMULTANEOUS, _bisect_up, _dpoly, candidate
 from .kernels import _poly as _hpoly
 
 #: rho * (piece length) at most this: every modal component turns by at most 2 rad per piece
@@ -323,7 +324,7 @@ def first_root(coef, work, stk):
 @numba.njit(cache=True)
 def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0, n_steps,
                dt, h_max,
-               n_terms, n_short, margin, n_samples, simultaneous, max_events, X, S, EV, n_ev,
+               n_terms, n_short, margin, simultaneous, max_events, X, S, EV, n_ev,
                counts):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
@@ -507,32 +508,22 @@ def spectral_bound_all(system) -> float:
     if n == 0:
         return 0.0
     Li = system.Linv
-    nc = system.n_contacts
-    closed = np.ones(nc, dtype=bool)
-
-    def sym(A):
-        return np.allclose(A, A.T, rtol=0, atol=1e-12 * np.abs(A).max(initial=1e-300))
-
-    K1, C1, _ = system.matrices(closed)
-    K0, C0 = system.K0, system.C0
-    Kh0, Kh1 = Li @ K0 @ Li.T, Li @ K1 @ Li.T
-    Ch0, Ch1 = Li @ C0 @ Li.T, Li @ C1 @ Li.T
+    K1, C1, _ = system.matrices(np.ones(system.n_contacts, dtype=bool))
     Wl = system.W @ Li.T  # rows L^-1 w_e
     w2 = np.einsum("ij,ij->i", Wl, Wl)
-    pos_k = bool(np.all(system.k >= 0))
-    pos_c = bool(np.all(system.c >= 0))
-    if sym(Kh0) and pos_k:
-        e0 = np.linalg.eigvalsh(0.5 * (Kh0 + Kh0.T))
-        e1 = np.linalg.eigvalsh(0.5 * (Kh1 + Kh1.T))
-        k = float(max(abs(e0[0]), abs(e1[-1]), abs(e1[0]), abs(e0[-1])))
-    else:
-        k = float(np.linalg.norm(Kh0, 2) + np.sum(np.abs(system.k) * w2))
-    if sym(Ch0) and pos_c:
-        e0 = np.linalg.eigvalsh(0.5 * (Ch0 + Ch0.T))
-        e1 = np.linalg.eigvalsh(0.5 * (Ch1 + Ch1.T))
-        c = float(max(abs(e0[0]), abs(e1[-1]), abs(e1[0]), abs(e0[-1])))
-    else:
-        c = float(np.linalg.norm(Ch0, 2) + np.sum(np.abs(system.c) * w2))
+
+    def norm_bound(H0, H1, per_contact):
+        """Bound of |L^-1 H_s L^-T| over every state (H0 always active, H1 all closed)."""
+        A0, A1 = Li @ H0 @ Li.T, Li @ H1 @ Li.T
+        if np.all(per_contact >= 0) and np.allclose(
+                A0, A0.T, rtol=0, atol=1e-12 * np.abs(A0).max(initial=1e-300)):
+            e0 = np.linalg.eigvalsh(0.5 * (A0 + A0.T))
+            e1 = np.linalg.eigvalsh(0.5 * (A1 + A1.T))
+            return float(max(abs(e0[0]), abs(e0[-1]), abs(e1[0]), abs(e1[-1])))
+        return float(np.linalg.norm(A0, 2) + np.sum(np.abs(per_contact) * w2))
+
+    k = norm_bound(system.K0, K1, system.k)
+    c = norm_bound(system.C0, C1, system.c)
     return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
 
 
@@ -572,9 +563,6 @@ class TaylorIntegrator:
 
     def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray):
         """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`)."""
-        from ..errors import ModelError
-        from .exact import GRAZE_MARGIN, SIMULTANEOUS, TAYLOR_SAMPLES
-
         sysm = self.sys
         X = np.empty((n_steps + 1, 2 * sysm.n))
         S = np.empty((n_steps + 1, sysm.n_contacts), dtype=bool)
@@ -588,7 +576,7 @@ class TaylorIntegrator:
             status, k, n_ev, contact = taylor_run(
                 self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, sysm.k,
                 sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
-                self.n_terms, self.n_short, GRAZE_MARGIN, TAYLOR_SAMPLES,
+                self.n_terms, self.n_short, GRAZE_MARGIN,
                 SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts)
             if status == 0:
                 break
