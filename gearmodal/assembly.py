@@ -35,6 +35,7 @@ from .kernels.wheel import (
     wheel_gyroscopic,
     wheel_mass,
 )
+from .model.clearance import polygon_ramps
 from .model.components import DIRECTIONS, Gear
 from .model.model import GROUND, Model
 
@@ -43,9 +44,13 @@ from .model.model import GROUND, Model
 class Contacts:
     """The unilateral contacts of a model, one row each.
 
-    ``element`` is the mesh or bearing name, ``contact`` the flank (``front``/``back``) or bearing
-    side (``x+``, ``x-``, ...), ``kind`` is ``mesh`` or ``bearing``. ``W`` (n_contacts x n_dofs)
-    maps the state to the deflection; ``offset`` is the backlash or clearance (m or rad).
+    ``element`` is the mesh or bearing name, ``contact`` the flank (``front``/``back``), bearing
+    side (``x+``, ``x-``, ...) or polygon facet (``facet0``, ...), ``kind`` is ``mesh`` or
+    ``bearing``. ``W`` (n_contacts x n_dofs) maps the state to the deflection; ``offset`` is the
+    backlash or clearance (m or rad).
+
+    ``angle`` is the normal of a polygonal clearance's facet in its bearing's axes (rad; NaN
+    for other contacts), see :mod:`gearmodal.model.clearance`.
     """
 
     element: list[str] = field(default_factory=list)
@@ -56,6 +61,11 @@ class Contacts:
     stiffness: np.ndarray = None
     damping: np.ndarray = None
     nominal: np.ndarray = None
+    angle: np.ndarray = None
+
+    def __post_init__(self):
+        if self.angle is None:
+            self.angle = np.full(len(self.element), np.nan)
 
     def __len__(self) -> int:
         return len(self.element)
@@ -262,9 +272,11 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     K = np.zeros((n, n))
     C = np.zeros((n, n))
     rows, offs, ks, cs, noms, elems, labels, kinds = [], [], [], [], [], [], [], []
+    angles = []
     lin_rows, lin_k, lin_c, lin_elem, lin_dir = [], [], [], [], []
 
-    def add_contact(w, off, k, c, nominal, elem, label, kind):
+    def add_contact(w, off, k, c, nominal, elem, label, kind, angle=np.nan):
+        angles.append(angle)
         rows.append(w)
         offs.append(off)
         ks.append(k)
@@ -337,7 +349,29 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     for br in model.bearings.values():
         spring_row, gap_row = bearing_jacobians(br, azimuth, T, centres)
         spring_row2, gap_row2 = bearing_jacobians(br, probe, T2, centres2)
+        radial = ()
+        if br.clearance_shape == "polygon":
+            # facet i: the deflection along its normal (cos a_i, sin a_i) in the bearing axes,
+            # a combination of the x and y deflection rows (joint.py), with the ramps of
+            # clearance.polygon_ramps (R2); damping shared in proportion to stiffness
+            radial = ("x", "y")
+            gx, gy = gap_row(0), gap_row(2)
+            if _acts(gx) or _acts(gy) or _acts(gap_row2(0)) or _acts(gap_row2(2)):
+                kr, cr = br.stiffness["x"], br.damping.get("x", 0.0)
+                offsets, kms = polygon_ramps(br.clearance["x"], kr, br.facets, br.ramps)
+                for i in range(br.facets):
+                    a_i = 2.0 * math.pi * i / br.facets
+                    w = math.cos(a_i) * gx + math.sin(a_i) * gy
+                    for m_, (o, km) in enumerate(zip(offsets, kms, strict=True)):
+                        add_contact(w, o, km, cr * km / kr if kr else 0.0, False, br.name,
+                                    f"facet{i}_{m_}", "bearing", a_i)
+        elif br.clearance_shape == "round":
+            raise ModelError(f"{br.name}.clearance_shape", "'round' is nonlinear and not "
+                             "assembled into the piecewise-linear system; integrate it with "
+                             "method='scipy', or use 'polygon' (exact method)")
         for key, k in br.stiffness.items():
+            if key in radial:
+                continue
             i = DIRECTIONS.index(key)
             c = br.damping.get(key, 0.0)
             gap = br.clearance.get(key, 0.0)
@@ -376,7 +410,8 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
         element=elems, contact=labels, kind=kinds,
         W=np.array(rows) if nc else np.zeros((0, n)),
         offset=np.array(offs, dtype=float), stiffness=np.array(ks, dtype=float),
-        damping=np.array(cs, dtype=float), nominal=np.array(noms, dtype=bool))
+        damping=np.array(cs, dtype=float), nominal=np.array(noms, dtype=bool),
+        angle=np.array(angles, dtype=float))
     nl = len(lin_rows)
     springs = Contacts(
         element=lin_elem, contact=lin_dir, kind=["spring"] * nl,

@@ -376,7 +376,7 @@ class CoupledAssembly(Assembly):
                 return Contacts(element=list(c.element), contact=list(c.contact),
                                 kind=list(c.kind), W=c.W @ N, offset=c.offset.copy(),
                                 stiffness=c.stiffness.copy(), damping=c.damping.copy(),
-                                nominal=c.nominal.copy())
+                                nominal=c.nominal.copy(), angle=c.angle.copy())
 
             self._reduced = Assembly(
                 dof_names=[self.dof_names[i] for i in self.independent],
@@ -602,7 +602,8 @@ class Coupled:
             W = c.W if c.W is not None else np.zeros((0, n0))
             return Contacts(element=list(c.element), contact=list(c.contact),
                             kind=list(c.kind), W=grow(W, W.shape[0], n), offset=c.offset,
-                            stiffness=c.stiffness, damping=c.damping, nominal=c.nominal)
+                            stiffness=c.stiffness, damping=c.damping, nominal=c.nominal,
+                            angle=c.angle)
 
         for c in self.constraints:
             if isinstance(c, Joint):

@@ -297,17 +297,25 @@ def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResu
         P[k0:k1 + 1] = X[k0:k1 + 1, :n] @ sy.W.T - sy.offset
         R[k0:k1 + 1] = X[k0:k1 + 1, n:] @ sy.W.T
     Fc = np.where(S, system.k * P + system.c * R, 0.0)
-    # one column per mesh flank, one per bearing direction (its two dead-band sides combined)
+    # one column per mesh flank, one per bearing direction (its two dead-band sides combined;
+    # a polygon's facet forces resolved on the bearing's x and y axes)
     names: dict[str, int] = {}
-    col, sign = np.empty(len(c.element), dtype=np.int64), np.ones(len(c.element))
+    cols, rows_, weights = [], [], []
     for e, (el, ct, kind) in enumerate(zip(c.element, c.contact, c.kind, strict=True)):
-        key = f"{el}.{ct}" if kind == "mesh" else f"{el}.{ct[:-1]}"
-        col[e] = names.setdefault(key, len(names))
-        if kind != "mesh" and not ct.endswith("+"):
-            sign[e] = -1.0
-    A = np.zeros((len(t), len(names)))
-    np.add.at(A.T, col, (Fc * sign).T)
-    blocks, labels = [A], list(names)
+        if kind == "mesh":
+            parts = [(f"{el}.{ct}", 1.0)]
+        elif np.isfinite(c.angle[e]):
+            parts = [(f"{el}.x", math.cos(c.angle[e])), (f"{el}.y", math.sin(c.angle[e]))]
+        else:
+            parts = [(f"{el}.{ct[:-1]}", 1.0 if ct.endswith("+") else -1.0)]
+        for key, wgt in parts:
+            rows_.append(e)
+            cols.append(names.setdefault(key, len(names)))
+            weights.append(wgt)
+    proj = np.zeros((len(c.element), len(names)))
+    np.add.at(proj, (np.array(rows_, dtype=np.int64), np.array(cols, dtype=np.int64)),
+              np.array(weights))
+    blocks, labels = [Fc @ proj], list(names)
     sp = asm.springs
     if sp is not None and len(sp):
         Fs = np.empty((len(t), len(sp)))

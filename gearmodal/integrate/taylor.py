@@ -501,29 +501,32 @@ def spectral_bound_all(system) -> float:
 
     As :meth:`PiecewiseLinearSystem.spectral_bound` (``|lam| <= (c + sqrt(c^2 + 4 k)) / 2``
     with ``k >= |L^-1 K_s L^-T|``, ``c >= |L^-1 C_s L^-T|``), with ``k`` and ``c`` bounded over
-    all states: for symmetric always-active matrices the contacts add positive semidefinite
-    terms, so the extreme eigenvalues of every state lie between those of the all-open and the
-    all-closed state; otherwise the triangle inequality over the contacts."""
+    all states: for symmetric always-active matrices every state lies between the always-active
+    part plus all contacts of negative coefficient and plus all of positive coefficient (the
+    contacts add semidefinite terms of their coefficient's sign; negative ones are the shaping
+    ramps of a polygonal clearance), so its extreme eigenvalues lie between theirs; otherwise
+    the triangle inequality over the contacts."""
     n = system.n
     if n == 0:
         return 0.0
     Li = system.Linv
-    K1, C1, _ = system.matrices(np.ones(system.n_contacts, dtype=bool))
-    Wl = system.W @ Li.T  # rows L^-1 w_e
+    W = system.W
+    Wl = W @ Li.T  # rows L^-1 w_e
     w2 = np.einsum("ij,ij->i", Wl, Wl)
 
-    def norm_bound(H0, H1, per_contact):
-        """Bound of |L^-1 H_s L^-T| over every state (H0 always active, H1 all closed)."""
-        A0, A1 = Li @ H0 @ Li.T, Li @ H1 @ Li.T
-        if np.all(per_contact >= 0) and np.allclose(
-                A0, A0.T, rtol=0, atol=1e-12 * np.abs(A0).max(initial=1e-300)):
-            e0 = np.linalg.eigvalsh(0.5 * (A0 + A0.T))
-            e1 = np.linalg.eigvalsh(0.5 * (A1 + A1.T))
-            return float(max(abs(e0[0]), abs(e0[-1]), abs(e1[0]), abs(e1[-1])))
+    def norm_bound(H0, per_contact):
+        """Bound of |L^-1 H_s L^-T| over every state (H0 always active)."""
+        A0 = Li @ H0 @ Li.T
+        if np.allclose(A0, A0.T, rtol=0, atol=1e-12 * np.abs(A0).max(initial=1e-300)):
+            lo = Li @ (H0 + (W.T * np.minimum(per_contact, 0.0)) @ W) @ Li.T
+            hi = Li @ (H0 + (W.T * np.maximum(per_contact, 0.0)) @ W) @ Li.T
+            e_lo = np.linalg.eigvalsh(0.5 * (lo + lo.T))
+            e_hi = np.linalg.eigvalsh(0.5 * (hi + hi.T))
+            return float(max(abs(e_lo[0]), abs(e_lo[-1]), abs(e_hi[0]), abs(e_hi[-1])))
         return float(np.linalg.norm(A0, 2) + np.sum(np.abs(per_contact) * w2))
 
-    k = norm_bound(system.K0, K1, system.k)
-    c = norm_bound(system.C0, C1, system.c)
+    k = norm_bound(system.K0, system.k)
+    c = norm_bound(system.C0, system.c)
     return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
 
 

@@ -44,18 +44,21 @@ def _same_tooth_system(field: str, a: Gear, b: Gear) -> None:
 
 def _support(field: str, spec, dofs: str) -> dict:
     """Normalise a bearing spec: a number (translational stiffness, N/m) or a table with
-    ``stiffness``, ``damping``, ``clearance`` tables keyed by direction."""
+    ``stiffness``, ``damping``, ``clearance`` tables keyed by direction and optionally
+    ``clearance_shape`` (``axes``/``polygon``/``round``), ``facets`` and ``ramps``
+    (:class:`Bearing`)."""
     if spec is None:
         return {"stiffness": {}, "damping": {}, "clearance": {}}
     if not isinstance(spec, dict):
         k = v.nonnegative(field, spec, "N/m")
         keys = ("x", "y", "z") if dofs == "full" else ("x", "y")
         return {"stiffness": dict.fromkeys(keys, k), "damping": {}, "clearance": {}}
-    unknown = set(spec) - {"stiffness", "damping", "clearance"}
+    unknown = set(spec) - {"stiffness", "damping", "clearance", "clearance_shape", "facets",
+                         "ramps"}
     if unknown:
         raise ModelError(f"{field}.{sorted(unknown)[0]}", "unknown key; allowed: stiffness, "
-                                                          "damping, clearance")
-    out = {}
+                         "damping, clearance, clearance_shape, facets, ramps")
+    out = {k: spec[k] for k in ("clearance_shape", "facets", "ramps") if k in spec}
     for key in ("stiffness", "damping", "clearance"):
         sub = spec.get(key, {})
         if not isinstance(sub, dict):

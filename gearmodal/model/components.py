@@ -29,6 +29,9 @@ DOF_LEVELS = ("torsional", "planar", "full")
 LEVEL_INDICES = {"torsional": (5,), "planar": (0, 1, 5), "full": (0, 1, 2, 3, 4, 5)}
 LOCAL_NAMES = ("x", "y", "z", "rx", "ry", "theta")
 DIRECTIONS = LOCAL_NAMES  # bearing directions, in the bearing axes
+#: how a bearing's x/y clearances combine (:class:`Bearing`)
+CLEARANCE_SHAPES = ("axes", "polygon", "round")
+MAX_FACETS = 720
 
 
 @dataclass(eq=False)
@@ -244,6 +247,20 @@ class Bearing:
     direction with clearance ``c`` pushes back with ``k (d - c)`` when ``d > c`` and with
     ``k (d + c)`` when ``d < -c``, where ``d`` is the deflection of a relative to b.
     ``at`` is the point where the bearing acts, as an offset from a's centre in a's frame, m.
+
+    ``clearance_shape`` sets how the ``x``/``y`` clearances combine (DESIGN 2.3):
+
+    * ``"axes"`` (default): an independent dead band per direction (a square clearance whose
+      corners engage both directions);
+    * ``"polygon"``: the round clearance ``clearance["x"]`` as ``facets`` directions at
+      ``2 pi i / facets`` in the bearing axes, each with ``ramps`` compression-only contacts
+      fitted so that their sum matches the round law (:mod:`gearmodal.model.clearance`):
+      piecewise linear (every integrator), continuous and conservative; it converges to
+      round as ``facets`` and ``ramps`` grow. Open in the nominal contact state.
+    * ``"round"``: the exactly round clearance, ``k (|d| - c)`` along ``d / |d|``: nonlinear,
+      so only ``method="scipy"`` integrates it (the reference for the polygon).
+
+    ``"polygon"`` and ``"round"`` need equal ``x`` and ``y`` stiffness, damping and clearance.
     """
 
     name: str
@@ -255,6 +272,9 @@ class Bearing:
     at: tuple = (0.0, 0.0, 0.0)
     axes_angle: float = 0.0
     axes_frame: str | None = None
+    clearance_shape: str = "axes"
+    facets: int = 16
+    ramps: int = 4
 
     def __post_init__(self):
         f = self.name
@@ -281,6 +301,24 @@ class Bearing:
             raise ModelError(f"{f}.at", f"= {self.at!r}: expected (x, y, z) in m")
         self.at = tuple(v.number(f"{f}.at", p, "m") for p in at)
         self.axes_angle = v.number(f"{f}.axes_angle", self.axes_angle, "rad")
+        v.choice(f"{f}.clearance_shape", self.clearance_shape, CLEARANCE_SHAPES)
+        self.facets = v.integer(f"{f}.facets", self.facets, minimum=3)
+        if self.facets > MAX_FACETS:
+            raise ModelError(f"{f}.facets", f"= {self.facets}: must be <= {MAX_FACETS}")
+        self.ramps = v.integer(f"{f}.ramps", self.ramps, minimum=1)
+        if self.ramps > 12:
+            raise ModelError(f"{f}.ramps", f"= {self.ramps}: must be <= 12")
+        if self.clearance_shape != "axes":
+            for label, d in (("clearance", self.clearance), ("stiffness", self.stiffness),
+                             ("damping", self.damping)):
+                if d.get("x", 0.0) != d.get("y", 0.0):
+                    raise ModelError(f"{f}.{label}", f"x = {d.get('x', 0.0)!r} and y = "
+                                     f"{d.get('y', 0.0)!r} differ: a {self.clearance_shape} "
+                                     "clearance needs equal x and y values")
+            if not self.clearance.get("x", 0.0) > 0.0:
+                raise ModelError(f"{f}.clearance.x", "missing: a "
+                                 f"{self.clearance_shape} clearance needs a radial clearance "
+                                 "> 0 m in x and y")
 
 
 def Shaft(name: str, a: str, b: str, stiffness: float, damping: float = 0.0) -> Bearing:

@@ -34,8 +34,11 @@ Supports (``planet_bearing``, ``carrier_bearing``, ``sun_support``, ``ring_suppo
 ``gear_bearing``, ``pinion_bearing``, gear_pair ``bearing``, ``shaft_bending``, ``suspension``)
     A number (translational stiffness in N/m on x, y, and z at ``full``), or a table with
     ``stiffness``, ``damping`` and ``clearance`` tables keyed by direction ``x, y, z`` (N/m,
-    N s/m, m) and ``rx, ry, theta`` (N m/rad, N m s/rad, rad), as :class:`Bearing`. A planet
-    bearing's x/y are radial/tangential.
+    N s/m, m) and ``rx, ry, theta`` (N m/rad, N m s/rad, rad), as :class:`Bearing`, plus
+    optionally ``clearance_shape`` (``"axes"``, default: a dead band per direction;
+    ``"polygon"``: ``facets`` facets around a round clearance; ``"round"``: exactly round,
+    scipy only), ``facets`` (default 16) and ``ramps`` (default 4). A planet bearing's x/y
+    are radial/tangential.
 
 ``type = "drivetrain"`` (:func:`~gearmodal.model.builders.drivetrain`)
     ``[rotor]``; ``[main_shaft]`` with ``stiffness`` (N m/rad) and ``damping``;
@@ -214,7 +217,9 @@ _CARRIER_KEYS = {k: _BODY_KEYS[k] for k in ("mass", "inertia", "inertia_diametra
 _SHAFT_KEYS = {"stiffness": (True, "N m/rad"), "damping": (False, "N m s/rad")}
 _SUPPORT_KEYS = {"stiffness": (True, "table keyed by direction"),
                  "damping": (False, "table keyed by direction"),
-                 "clearance": (False, "table keyed by direction")}
+                 "clearance": (False, "table keyed by direction"),
+                 "clearance_shape": (False, "axes, polygon or round"),
+                 "facets": (False, "integer >= 3"), "ramps": (False, "integer 1..12")}
 _STAGE_COMMON = {"type": (False, "planetary or parallel"), "name": (False, "string"),
                  "coupling_stiffness": (False, "N m/rad"),
                  "dofs": (False, "torsional, planar or full"),
@@ -453,10 +458,12 @@ def _support(path: str, value):
     if isinstance(value, dict):
         _table(path, value, _SUPPORT_KEYS)
         for key, sub in value.items():
+            if key in ("clearance_shape", "facets", "ramps"):
+                continue
             if not isinstance(sub, dict):
                 raise _err(_join(path, key), "expected a table keyed by direction (x, y, z, "
                                              f"rx, ry, theta), got {type(sub).__name__} {sub!r}")
-        return {k: dict(s) for k, s in value.items()}
+        return {k: (dict(s) if isinstance(s, dict) else s) for k, s in value.items()}
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise _err(path, "expected a stiffness in N/m or a table with stiffness, damping and "
                          f"clearance, got {type(value).__name__} {value!r}")
