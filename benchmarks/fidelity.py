@@ -26,9 +26,15 @@ perturbation at rounding level. The clearance case rattles chaotically after cut
 change of setting moves single-run peaks by about as much as this perturbation does: a rung's
 error is meaningful only where it exceeds the floor's.
 
-Rungs not in the ladder yet (issue "fidelity ladder"): polygonal and round clearance,
-mesh-stiffness alternation. The DOF level of the gearbox stages is a rung (``stages_dofs``),
-listed when the model can be built at that level.
+The carrier-bearing clearance is a per-axis dead band in the reference; the rungs
+``clearance_polygon<N>x<M>`` make it round by N facets of M ramps each
+(:mod:`gearmodal.model.clearance`). The exactly round clearance is nonlinear (``method="scipy"``
+only) and out of reach on this 30 s turbine run (stiff meshes: an explicit solver needs
+microsecond steps); its comparison with the polygon is made on the planetary stage alone
+(``benchmarks/clearance_shape.py``).
+Rungs not in the ladder yet (issue "fidelity ladder"): mesh-stiffness alternation. The DOF
+level of the gearbox stages is a rung (``stages_dofs``), listed when the model can be built at
+that level.
 """
 
 from __future__ import annotations
@@ -65,6 +71,8 @@ def fidelity_metrics(result) -> dict:
 
 def rungs(quick: bool) -> list[tuple[str, str, str, dict]]:
     """(rung, knob, setting, overrides on top of the reference)."""
+    from double_contact import CLEARANCE
+
     out = [("reference", "-", "refreeze 0.125 deg, dt 1 ms, exact (Taylor)", {}),
            ("floor", "chaos floor", "rotor speed at start x (1 + 1e-13)",
             {"turbine.rotor_speed0_rpm": 6.0 * (1 + 1e-13)})]
@@ -82,6 +90,13 @@ def rungs(quick: bool) -> list[tuple[str, str, str, dict]]:
                     {"scene.method": "newmark", "scene.dt": 2.5e-4}))
     out.append(("old_default", "the scene's settings before 2026-11-21",
                 "refreeze 1 deg, dt 2 ms", {"turbine.refreeze_deg": 1.0, "scene.dt": 2e-3}))
+    for facets, ramps in (((16, 4),) if quick else ((16, 1), (16, 4), (32, 4))):
+        out.append((f"clearance_polygon{facets}x{ramps}", "carrier clearance shape",
+                    f"round by {facets} facets x {ramps} ramps (per-axis dead band in the "
+                    "reference)",
+                    {"model.stages.0.carrier_bearing": {
+                        **CLEARANCE, "clearance_shape": "polygon", "facets": facets,
+                        "ramps": ramps}}))
     for level in ("torsional", "full"):
         out.append((f"dofs_{level}", "stages_dofs", f"all stages {level}",
                     {f"model.stages.{i}.dofs": level for i in range(3)}))

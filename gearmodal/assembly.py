@@ -109,6 +109,10 @@ class Assembly:
     f_cent : centrifugal force per (rad/s)^2.
     B : load map, generalised force = ``B @ u`` for the load values ``u`` (N, N m).
     contacts : the unilateral contacts (:class:`Contacts`).
+    round : the exactly round clearances (``clearance_shape="round"``): two rows per bearing,
+        its x and y deflection in the bearing axes (``contact`` ``x``/``y``, ``kind``
+        ``round``), with the radial clearance, stiffness and damping. Nonlinear: only the
+        scipy reference integrates them (:func:`require_piecewise_linear`).
     """
 
     dof_names: list[str]
@@ -124,6 +128,16 @@ class Assembly:
     azimuth: float = 0.0
     body_slices: dict = field(default_factory=dict)
     springs: Contacts | None = None
+    round: Contacts | None = None
+
+    def require_piecewise_linear(self, what: str) -> None:
+        """Raise a :class:`ModelError` naming the bearing if the model has a round clearance,
+        which ``what`` (a method, a solver) cannot handle."""
+        if self.round is not None and len(self.round):
+            name = self.round.element[0]
+            raise ModelError(f"{name}.clearance_shape", f"= 'round' is nonlinear: {what} "
+                             "needs a piecewise-linear model; integrate it with "
+                             "method='scipy' (the reference) or use clearance_shape='polygon'")
 
     @property
     def n(self) -> int:
@@ -274,6 +288,7 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     rows, offs, ks, cs, noms, elems, labels, kinds = [], [], [], [], [], [], [], []
     angles = []
     lin_rows, lin_k, lin_c, lin_elem, lin_dir = [], [], [], [], []
+    rnd = {"W": [], "element": [], "contact": [], "offset": [], "k": [], "c": []}
 
     def add_contact(w, off, k, c, nominal, elem, label, kind, angle=np.nan):
         angles.append(angle)
@@ -366,9 +381,17 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
                         add_contact(w, o, km, cr * km / kr if kr else 0.0, False, br.name,
                                     f"facet{i}_{m_}", "bearing", a_i)
         elif br.clearance_shape == "round":
-            raise ModelError(f"{br.name}.clearance_shape", "'round' is nonlinear and not "
-                             "assembled into the piecewise-linear system; integrate it with "
-                             "method='scipy', or use 'polygon' (exact method)")
+            # (R1) of clearance.py on the x and y deflection rows (joint.py)
+            radial = ("x", "y")
+            gx, gy = gap_row(0), gap_row(2)
+            if _acts(gx) or _acts(gy) or _acts(gap_row2(0)) or _acts(gap_row2(2)):
+                for lab, w in (("x", gx), ("y", gy)):
+                    rnd["W"].append(w)
+                    rnd["element"].append(br.name)
+                    rnd["contact"].append(lab)
+                    rnd["offset"].append(br.clearance["x"])
+                    rnd["k"].append(br.stiffness["x"])
+                    rnd["c"].append(br.damping.get("x", 0.0))
         for key, k in br.stiffness.items():
             if key in radial:
                 continue
@@ -418,6 +441,12 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
         W=np.array(lin_rows) if nl else np.zeros((0, n)), offset=np.zeros(nl),
         stiffness=np.array(lin_k, dtype=float), damping=np.array(lin_c, dtype=float),
         nominal=np.ones(nl, dtype=bool))
+    nr = len(rnd["W"])
+    round_ = None if not nr else Contacts(
+        element=rnd["element"], contact=rnd["contact"], kind=["round"] * nr,
+        W=np.array(rnd["W"]), offset=np.array(rnd["offset"], dtype=float),
+        stiffness=np.array(rnd["k"], dtype=float), damping=np.array(rnd["c"], dtype=float),
+        nominal=np.zeros(nr, dtype=bool))
     return Assembly(dof_names=model.dof_names, load_names=load_names, M=M, C=C, K=K, G=G,
                     K_cent=Kc, f_cent=fc, B=B, contacts=contacts, azimuth=azimuth,
-                    body_slices=slices, springs=springs)
+                    body_slices=slices, springs=springs, round=round_)

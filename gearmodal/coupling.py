@@ -383,7 +383,8 @@ class CoupledAssembly(Assembly):
                 load_names=list(self.load_names), M=N.T @ self.M @ N, C=N.T @ self.C @ N,
                 K=N.T @ self.K @ N, G=N.T @ self.G @ N, K_cent=N.T @ self.K_cent @ N,
                 f_cent=N.T @ self.f_cent, B=N.T @ self.B, contacts=red(self.contacts),
-                azimuth=self.azimuth, body_slices={}, springs=red(self.springs))
+                azimuth=self.azimuth, body_slices={}, springs=red(self.springs),
+                round=red(self.round))
         return self._reduced
 
     def expand(self, z: np.ndarray) -> np.ndarray:
@@ -613,7 +614,7 @@ class Coupled:
         return CoupledAssembly(
             dof_names=names, load_names=loads, M=M, C=C, K=K, G=G, K_cent=Kc, f_cent=fc, B=B,
             contacts=pad(base.contacts), azimuth=azimuth, body_slices=slices,
-            springs=pad(base.springs), Gc=Gc, N=N, independent=ind,
+            springs=pad(base.springs), round=pad(base.round), Gc=Gc, N=N, independent=ind,
             constraint_names=[f"{c.name}.{d}" for c in self.constraints
                               for d in self._row_labels(c)])
 

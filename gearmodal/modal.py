@@ -179,6 +179,7 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     if not math.isfinite(speed_rpm) or speed_rpm < 0:
         raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number >= 0 rpm")
     asm, name = as_assembly(model)
+    asm.require_piecewise_linear("gm.modal")
     red, N = reduction(asm)  # a coupled system is solved in its constrained coordinates
     om = speed_rpm * RPM
     eq = None

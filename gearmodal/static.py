@@ -119,6 +119,7 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
     balanced; see :func:`balance`) or when no equilibrium is found within ``max_iter`` steps.
     """
     full, _ = as_assembly(model)
+    full.require_piecewise_linear("gm.equilibrium")
     asm, N = reduction(full)
     om = float(speed_rpm) * RPM
     K = asm.K + om**2 * asm.K_cent

@@ -325,9 +325,28 @@ def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResu
                              + (X[k0:k1 + 1, n:] @ w.T) * sp.damping)
         blocks.append(Fs)
         labels += [f"{el}.{ct}" for el, ct in zip(sp.element, sp.contact, strict=True)]
+    rd = asm.round
+    if rd is not None and len(rd):  # round clearances (scipy): k (r - c) + c_d r' while r > c
+        from .scipy_ref import _Round
+
+        Fr = np.empty((len(t), len(rd)))
+        for k0, k1, sy in seg_systems:
+            rr = _Round(sy)
+            Xs = X[k0:k1 + 1]
+            for i, x in enumerate(Xs):
+                Fr[k0 + i] = rr.forces(x, rr.radius(x) > rr.c).ravel()
+        blocks.append(Fr)
+        labels += [f"{el}.{ct}" for el, ct in zip(rd.element, rd.contact, strict=True)]
     # a bearing direction is a spring or a dead band, never both: the labels are distinct
     forces = pd.DataFrame(np.concatenate(blocks, axis=1), index=q.index, columns=labels)
-    rows = [(te, c.element[e], c.contact[e], "closed" if b else "open",
+    nc = len(c.element)
+
+    def where(e):
+        if e < nc:
+            return c.element[e], c.contact[e]
+        return asm.round.element[2 * (e - nc)], "radial"  # a round clearance (scipy)
+
+    rows = [(te, *where(e), "closed" if b else "open",
              "closed" if a else "open", r, f) for te, e, b, a, r, f in events]
     ev = pd.DataFrame(rows, columns=EVENT_COLUMNS)
     state = pd.DataFrame(S, index=q.index, columns=system.names)

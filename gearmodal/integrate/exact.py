@@ -142,6 +142,7 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     ``"expm"`` pays off only when few contact states recur over many steps with ``dt`` much
     longer than the fastest period.
     """
+    system.asm.require_piecewise_linear("method='exact'")
     if propagator not in PROPAGATORS:
         raise ModelError("propagator", f"= {propagator!r}: must be one of "
                          + ", ".join(map(repr, PROPAGATORS)))

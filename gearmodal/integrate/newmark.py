@@ -20,6 +20,7 @@ BETA, GAMMA = 0.25, 0.5
 
 def run_newmark(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
                 x0: np.ndarray, s0: np.ndarray, **_):
+    system.asm.require_piecewise_linear("method='newmark'")
     n = system.n
     M = system.asm.M
     h = dt

@@ -42,6 +42,8 @@ def _arrays(asm: Assembly) -> dict[str, np.ndarray]:
     out["contacts.offset"] = asm.contacts.offset
     if asm.springs is not None:
         out["springs.W"] = asm.springs.W
+    if asm.round is not None:
+        out["round.W"] = asm.round.W
     return out
 
 
@@ -107,8 +109,11 @@ class AzimuthAssembler:
         springs = t.springs
         if springs is not None:
             springs = dataclasses.replace(springs, W=v["springs.W"])
+        round_ = t.round
+        if round_ is not None:
+            round_ = dataclasses.replace(round_, W=v["round.W"])
         return dataclasses.replace(t, **{f: v[f] for f in _FIELDS}, contacts=contacts,
-                                   springs=springs, azimuth=float(azimuth))
+                                   springs=springs, round=round_, azimuth=float(azimuth))
 
     def stiffness_rate(self, azimuth: float) -> np.ndarray:
         """``dK/dpsi`` at ``azimuth`` (N/m per rad): the derivative of the interpolant; by

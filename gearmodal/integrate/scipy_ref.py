@@ -5,6 +5,11 @@ is an event function (terminal, direction set by its state). At an event the sta
 the solver restarts from the located point. Its limits, as documented by SciPy: events are
 found from sign changes between the solver's own steps, so two crossings inside one solver step
 (a brief contact, a graze) are missed, and the accuracy is that of ``rtol``/``atol``.
+
+It is also the one method that integrates the exactly round bearing clearance
+(``clearance_shape="round"``, (R1) of :mod:`gearmodal.model.clearance`): a nonlinear force
+``k (|d| - c) + c_d |d|'`` along ``d / |d|`` while in contact, with ``|d| - c`` as one more
+event function; its events are logged with contact ``radial``.
 """
 
 from __future__ import annotations
@@ -29,13 +34,20 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     filled = 1
     nfev = 0
     muted: set = set()  # contacts whose event is ignored for one short restart span
+    nc = system.n_contacts
+    rd = _Round(system)
+    sr = rd.radius(x) > rd.c  # round clearances in contact (indices nc + b in events)
     while filled <= n_steps:
         A, f = system.first_order(s)
 
-        def rhs(tt, xx, A=A, f=f, Minv=system.Minv):
+        sr_now = sr.copy()  # the round clearances' state over this restart span
+
+        def rhs(tt, xx, A=A, f=f, Minv=system.Minv, sr=sr_now):
             k = min(int(tt / dt), n_steps - 1)
             w = tt / dt - k
             F = F_grid[k] * (1 - w) + F_grid[k + 1] * w + f
+            if rd.nr:
+                F = F + rd.force(xx, sr)
             out = A @ xx
             out[n:] += Minv @ F
             return out
@@ -47,8 +59,16 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             ev.direction = -1.0 if active else 1.0
             return ev
 
-        evs = [make(e, bool(s[e])) for e in range(system.n_contacts) if e not in muted]
-        idx = [e for e in range(system.n_contacts) if e not in muted]
+        def make_round(b, active):
+            def ev(tt, xx):
+                return rd.radius(xx)[b] - rd.c[b]
+            ev.terminal = True
+            ev.direction = -1.0 if active else 1.0
+            return ev
+
+        idx = [e for e in range(nc + rd.nr) if e not in muted]
+        evs = [make(e, bool(s[e])) if e < nc else make_round(e - nc, bool(sr[e - nc]))
+               for e in idx]
         # a contact switched while tangent (gap and rate ~ 0) would fire again at the restart
         # point and flip forever: its event is muted over a span of 1e-6 dt after the restart
         t_stop = min(t + 1e-6 * dt, t_grid[-1]) if muted else t_grid[-1]
@@ -85,6 +105,9 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
                 # a muted contact whose state no longer matches its gap switches now
                 p, r = system.penetration(x), system.rate(x)
                 for e in sorted(muted):
+                    if e >= nc:
+                        sr = rd.switch(x, sr, e - nc, float(t), nc, events, check=True)
+                        continue
                     if (p[e] > 0) != s[e]:
                         s = s.copy()
                         s[e] = not s[e]
@@ -106,6 +129,9 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             muted = set()
         r = system.rate(x)
         for e in fired:
+            if e >= nc:
+                sr = rd.switch(x, sr, e - nc, float(te), nc, events)
+                continue
             before = bool(s[e])
             s = s.copy()
             s[e] = not before
@@ -115,3 +141,55 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             raise ModelError("simulate", f"scipy: more than {max_events} events")
         t = float(te)
     return X, S, events, {"nfev": nfev}
+
+
+class _Round:
+    """The round clearances of a system (pairs of x/y rows of ``asm.round``), R1."""
+
+    def __init__(self, system: PiecewiseLinearSystem):
+        rd = system.asm.round
+        self.n = system.n
+        self.nr = 0 if rd is None else len(rd) // 2
+        if self.nr:
+            self.W = rd.W
+            self.c = rd.offset[::2]
+            self.k = rd.stiffness[::2]
+            self.cd = rd.damping[::2]
+        else:
+            self.c = np.zeros(0)
+
+    def radius(self, x: np.ndarray) -> np.ndarray:
+        if not self.nr:
+            return np.zeros(0)
+        d = self.W @ x[:self.n]
+        return np.hypot(d[0::2], d[1::2])
+
+    def forces(self, x: np.ndarray, sr: np.ndarray) -> np.ndarray:
+        """(nr, 2): the x/y force of each clearance on its deflection (0 where open), N."""
+        d = self.W @ x[:self.n]
+        dv = self.W @ x[self.n:]
+        dx, dy, vx, vy = d[0::2], d[1::2], dv[0::2], dv[1::2]
+        r = np.hypot(dx, dy)
+        safe = np.where(r > 0, r, 1.0)
+        ux, uy = dx / safe, dy / safe
+        fr = np.where(sr, self.k * (r - self.c) + self.cd * (ux * vx + uy * vy), 0.0)
+        return np.stack([fr * ux, fr * uy], axis=1)
+
+    def force(self, x: np.ndarray, sr: np.ndarray) -> np.ndarray:
+        """Generalised force of the round clearances (they push back: ``-W^T f``)."""
+        return -(self.W.T @ self.forces(x, sr).ravel())
+
+    def switch(self, x, sr, b, t, nc, events, check=False):
+        """Toggle clearance ``b`` (if ``check``: only where its state no longer matches)."""
+        r = self.radius(x)[b]
+        if check and (r > self.c[b]) == sr[b]:
+            return sr
+        sr = sr.copy()
+        sr[b] = not sr[b]
+        f = self.forces(x, sr)[b]
+        d = self.W @ x[:self.n]
+        dv = self.W @ x[self.n:]
+        rate = (d[2 * b] * dv[2 * b] + d[2 * b + 1] * dv[2 * b + 1]) / max(r, 1e-300)
+        events.append((t, nc + b, not sr[b], bool(sr[b]), float(rate),
+                       float(np.hypot(*f))))
+        return sr
