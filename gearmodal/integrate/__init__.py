@@ -333,8 +333,7 @@ def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResu
         for k0, k1, sy in seg_systems:
             rr = _Round(sy)
             Xs = X[k0:k1 + 1]
-            for i, x in enumerate(Xs):
-                Fr[k0 + i] = rr.forces(x, rr.radius(x) > rr.c).ravel()
+            Fr[k0:k1 + 1] = rr.forces(Xs, rr.radius(Xs) > rr.c).reshape(len(Xs), -1)
         blocks.append(Fr)
         labels += [f"{el}.{ct}" for el, ct in zip(rd.element, rd.contact, strict=True)]
     # a bearing direction is a spring or a dead band, never both: the labels are distinct

@@ -159,21 +159,23 @@ class _Round:
             self.c = np.zeros(0)
 
     def radius(self, x: np.ndarray) -> np.ndarray:
+        """|d| of each clearance (..., nr) for states ``x`` (..., 2n), m."""
         if not self.nr:
-            return np.zeros(0)
-        d = self.W @ x[:self.n]
-        return np.hypot(d[0::2], d[1::2])
+            return np.zeros(x.shape[:-1] + (0,))
+        d = x[..., :self.n] @ self.W.T
+        return np.hypot(d[..., 0::2], d[..., 1::2])
 
     def forces(self, x: np.ndarray, sr: np.ndarray) -> np.ndarray:
-        """(nr, 2): the x/y force of each clearance on its deflection (0 where open), N."""
-        d = self.W @ x[:self.n]
-        dv = self.W @ x[self.n:]
-        dx, dy, vx, vy = d[0::2], d[1::2], dv[0::2], dv[1::2]
+        """(..., nr, 2): the x/y force of each clearance on its deflection (0 where open), N,
+        for states ``x`` (..., 2n) and contact flags ``sr`` (..., nr)."""
+        d = x[..., :self.n] @ self.W.T
+        dv = x[..., self.n:] @ self.W.T
+        dx, dy, vx, vy = d[..., 0::2], d[..., 1::2], dv[..., 0::2], dv[..., 1::2]
         r = np.hypot(dx, dy)
         safe = np.where(r > 0, r, 1.0)
         ux, uy = dx / safe, dy / safe
         fr = np.where(sr, self.k * (r - self.c) + self.cd * (ux * vx + uy * vy), 0.0)
-        return np.stack([fr * ux, fr * uy], axis=1)
+        return np.stack([fr * ux, fr * uy], axis=-1)
 
     def force(self, x: np.ndarray, sr: np.ndarray) -> np.ndarray:
         """Generalised force of the round clearances (they push back: ``-W^T f``)."""
