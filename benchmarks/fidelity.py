@@ -29,9 +29,9 @@ error is meaningful only where it exceeds the floor's.
 The carrier-bearing clearance is a per-axis dead band in the reference; the rungs
 ``clearance_polygon<N>x<M>`` make it round by N facets of M ramps each
 (:mod:`gearmodal.model.clearance`). The exactly round clearance is nonlinear (``method="scipy"``
-only) and out of reach on this 30 s turbine run (stiff meshes: an explicit solver needs
-microsecond steps); its comparison with the polygon is made on the planetary stage alone
-(``benchmarks/clearance_shape.py``).
+only) and cannot run the turbine case (its start is a static equilibrium, and an explicit
+solver would need microsecond steps over 30 s); its comparison with the polygon is made on the
+planetary stage alone (``benchmarks/clearance_shape.py``).
 Rungs not in the ladder yet (issue "fidelity ladder"): mesh-stiffness alternation. The DOF
 level of the gearbox stages is a rung (``stages_dofs``), listed when the model can be built at
 that level.

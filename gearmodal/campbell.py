@@ -250,6 +250,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     if s.size < 2 or not np.all(np.isfinite(s)) or np.any(s < 0) or np.any(np.diff(s) <= 0):
         raise ModelError("speeds_rpm", "must be at least two finite, increasing speeds >= 0 rpm")
     asm = model.assemble()
+    asm.require_piecewise_linear("gm.campbell")
     red, N = reduction(asm)  # a coupled system is solved in its constrained coordinates
     if loads:
         from .static import equilibrium

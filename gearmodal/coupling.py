@@ -561,6 +561,8 @@ class Coupled:
         constraint gradients and the constrained basis (module docstring)."""
         if self.merged.bodies:
             base = self.merged.assemble(azimuth)
+            # the multipliers are recovered from the piecewise-linear contact forces only
+            base.require_piecewise_linear("a coupled system (gm.Coupled)")
         else:
             base = Assembly(dof_names=[], load_names=[], M=np.zeros((0, 0)),
                             C=np.zeros((0, 0)), K=np.zeros((0, 0)), G=np.zeros((0, 0)),

@@ -57,7 +57,6 @@ def test_fit_matches_round_law_in_the_continuum_limit(ramps, tol):
         far = 1e4 * C
         f_far = sum(k * ramp_force(np.array([far]), o)[0] for o, k in zip(cm, km, strict=True))
         assert abs(f_far / (2 * math.pi) - K * (far - C)) < 1e-3 * K * C
-    assert np.all(np.cumsum(km) > 0)  # every reachable state is stiff, never soft
 
 
 def test_assembled_force_law_converges_to_round():
@@ -172,6 +171,11 @@ def test_round_clearance_by_scipy_and_polygon_convergence():
     assert list(rnd.events.contact.unique()) == ["radial"]
     fr = np.hypot(rnd.forces["b.x"], rnd.forces["b.y"]).to_numpy()
     assert fr.max() == pytest.approx(f0, rel=0.02)  # rolling with the load at the end
+    # rolling slowly, the bearing's x/y columns follow the load (signs and axes); what is left
+    # is the puck's vibration after its impact on the clearance (measured 22 N of 1500)
+    t = rnd.t[-100:]
+    for col, load in (("b.x", loads["m.force_x"]), ("b.y", loads["m.force_y"])):
+        assert np.abs(rnd.forces[col].to_numpy()[-100:] - load(t)).max() < 0.03 * f0
     r_round = np.hypot(rnd.q["m.x"], rnd.q["m.y"]).to_numpy()
     errs = {}
     for n in (16, 32):
@@ -190,3 +194,7 @@ def test_round_clearance_by_scipy_and_polygon_convergence():
         gm.simulate(puck("round"), 0.01, dt=1e-3)
     with pytest.raises(ModelError, match=r"b\.clearance_shape.*gm.equilibrium"):
         gm.equilibrium(puck("round"), {"m.force_x": 1.0})
+    with pytest.raises(ModelError, match=r"b\.clearance_shape.*gm.campbell"):
+        gm.campbell(puck("round"), [0.0, 100.0])
+    with pytest.raises(ModelError, match=r"b\.clearance_shape.*coupled"):
+        gm.Coupled([gm.ModelSystem(puck("round"), "p")]).assemble()

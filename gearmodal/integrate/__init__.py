@@ -78,7 +78,8 @@ def rotating_geometry(model: Model) -> bool:
     scale = max(np.abs(a.stiffness()).max(), 1e-300)
     same = (np.allclose(a.stiffness(), b.stiffness(), rtol=0, atol=1e-12 * scale)
             and np.allclose(a.contacts.W, b.contacts.W, rtol=0, atol=1e-12)
-            and np.allclose(a.B, b.B, rtol=0, atol=1e-12))
+            and np.allclose(a.B, b.B, rtol=0, atol=1e-12)
+            and (a.round is None or np.allclose(a.round.W, b.round.W, rtol=0, atol=1e-12)))
     return not same
 
 
@@ -166,6 +167,9 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         if geometry.exact:
             from ..static import free_modes
 
+            # the static conditioning of refrozen segments needs a piecewise-linear model
+            asm.require_piecewise_linear("refrozen geometry (speed > 0 with frames turning "
+                                         "against each other)")
             statics = QuasiStatic(free_modes(asm), asm.M)
     for k0, k1, azimuth in segments:
         seg_asm = asm if len(segments) == 1 else geometry.assemble(azimuth=azimuth)

@@ -34,9 +34,11 @@ class SimulationResult:
     q, v : DataFrames of displacements (m, rad) and velocities by DOF name, indexed by time.
     forces : DataFrame indexed by time: ``<mesh>.front`` / ``<mesh>.back`` flank forces (N)
         and ``<bearing>.<direction>`` bearing forces (N or N m; per-axis dead bands combined,
-        positive when the bearing pushes body a towards the negative direction).
+        polygonal and round clearances resolved on the bearing's x and y axes, positive when
+        the bearing pushes body a towards the negative direction).
     events : the contact-state event log, one row per change: ``time`` (s), ``element``,
-        ``contact`` (``front``/``back`` flank, bearing side ``x+``...), ``state_before``,
+        ``contact`` (``front``/``back`` flank, bearing side ``x+``..., polygon facet ramp
+        ``facet<i>_<m>``, round clearance ``radial``), ``state_before``,
         ``state_after`` (``open``/``closed``), ``gap_rate`` (m/s, penetration rate at the
         switch), ``force_after`` (N, the contact force just after the switch).
     contact_state : DataFrame of booleans (closed) per contact at the output times.

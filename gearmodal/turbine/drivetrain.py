@@ -205,6 +205,9 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         clock["wind_setup_s"] = time.process_time() - tw
 
     geo = AzimuthAssembler(gearbox)
+    # the start is a static equilibrium and the gearbox runs piecewise linear
+    geo.template.require_piecewise_linear("the turbine co-simulation (its start is a static "
+                                          "equilibrium)")
     asm0 = geo.template
     for name in ("rotor.theta", "generator.theta"):
         if name not in asm0.dof_names:
