@@ -21,7 +21,11 @@ polygons 8x4, 16x1 (one ramp per facet: the rolling-element law), 16x4, 32x4, 64
 exact method; 16x4 also by DOP853 at rtol 1e-10, to separate the integrator from the model.
 ``dt`` = 0.1 ms output for every row.
 
-Writes ``DIR/clearance_shape.csv``: ``shape``, ``facets``, ``ramps``, ``method``, ``cpu_s``,
+Writes ``DIR/force_law.csv`` first: the largest difference between the facets' static force law
+and the round law, in units of ``k c`` (:func:`gearmodal.model.clearance.force_law_error`), per
+``facets``, ``ramps`` and range of deflection ``r_max`` (in clearances).
+
+Then ``DIR/clearance_shape.csv``: ``shape``, ``facets``, ``ramps``, ``method``, ``cpu_s``,
 ``n_contacts``, ``n_events``, ``max_tooth_force_N`` (largest flank force of any mesh),
 ``max_carrier_bearing_force_N`` (largest resultant), ``final_carrier_offset_m`` (|x, y| of
 the carrier at the end), ``double_contact_time_s`` (time with a double contact on any mesh),
@@ -45,6 +49,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 import gearmodal as gm  # noqa: E402
+from gearmodal.model.clearance import force_law_error  # noqa: E402
 
 MODEL = ROOT / "studies" / "models" / "planetary_clearance.toml"
 TORQUE, RADIAL, ANGLE = 2.6e5, 3.0e5, math.radians(-60.0)
@@ -112,6 +117,11 @@ def main(argv=None):
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     t_end = 0.3 if args.quick else 0.6
+    law = pd.DataFrame([{"facets": n, "ramps": mm, "r_max": rm,
+                         "max_error_kc": force_law_error(n, mm, rm, n_r=int(40 * (rm - 1)) + 1)}
+                        for n in (8, 16, 32, 64) for mm in (1, 4) for rm in (3.0, 30.0)])
+    law.to_csv(args.out / "force_law.csv", index=False)
+    print(law.to_string(), flush=True)
     table = []
     for shape, n, mm, method, opts in rows(args.quick):
         m = model(shape, n or 16, mm or 4)

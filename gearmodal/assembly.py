@@ -364,14 +364,16 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     for br in model.bearings.values():
         spring_row, gap_row = bearing_jacobians(br, azimuth, T, centres)
         spring_row2, gap_row2 = bearing_jacobians(br, probe, T2, centres2)
-        radial = ()
+        radial, acts = (), False
+        if br.clearance_shape != "axes":  # x and y make one radial clearance
+            radial = ("x", "y")
+            gx, gy = gap_row(0), gap_row(2)  # the x and y deflection rows (joint.py)
+            acts = _acts(gx) or _acts(gy) or _acts(gap_row2(0)) or _acts(gap_row2(2))
         if br.clearance_shape == "polygon":
             # facet i: the deflection along its normal (cos a_i, sin a_i) in the bearing axes,
-            # a combination of the x and y deflection rows (joint.py), with the ramps of
-            # clearance.polygon_ramps (R2); damping shared in proportion to stiffness
-            radial = ("x", "y")
-            gx, gy = gap_row(0), gap_row(2)
-            if _acts(gx) or _acts(gy) or _acts(gap_row2(0)) or _acts(gap_row2(2)):
+            # with the ramps of clearance.polygon_ramps (R2); damping shared in proportion to
+            # stiffness
+            if acts:
                 kr, cr = br.stiffness["x"], br.damping.get("x", 0.0)
                 offsets, kms = polygon_ramps(br.clearance["x"], kr, br.facets, br.ramps)
                 for i in range(br.facets):
@@ -381,10 +383,8 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
                         add_contact(w, o, km, cr * km / kr if kr else 0.0, False, br.name,
                                     f"facet{i}_{m_}", "bearing", a_i)
         elif br.clearance_shape == "round":
-            # (R1) of clearance.py on the x and y deflection rows (joint.py)
-            radial = ("x", "y")
-            gx, gy = gap_row(0), gap_row(2)
-            if _acts(gx) or _acts(gy) or _acts(gap_row2(0)) or _acts(gap_row2(2)):
+            # (R1) of clearance.py on the x and y deflection rows
+            if acts:
                 for lab, w in (("x", gx), ("y", gy)):
                     rnd["W"].append(w)
                     rnd["element"].append(br.name)

@@ -28,10 +28,11 @@ match exact for ``r >> c`` (``h -> pi r / 2 - 2 c_m``)::
 One ramp (``M = 1``, ``k_1 = 4 k / N``, ``c_1 = c``) is the classical rolling-element law: it
 starts as ``(r - c)^(3/2)``, 44 % below (R1) at ``r = 1.3 c`` and ``0.27 k c`` below for large
 ``r``; ``M = 4`` (the default) is within 1 % of ``k c`` for every ``r`` in the continuum limit.
-``N`` facets add an anisotropy that grows with ``r`` (measured: 16 facets 4.9 % of ``k c`` for
-``r <= 3 c``, 21 % of ``k c`` up to ``30 c``, where it is 0.7 % of the force; 64 facets 1.0 %
-and 2.9 %). Some ``k_m`` are negative (they shape the start of contact); the stiffness of
-every reachable state, a prefix of the ramps of each facet, is not (checked).
+``N`` facets add an anisotropy that grows with ``r`` (:func:`force_law_error`, tabled by
+``benchmarks/clearance_shape.py``: 16 facets 5.1 % of ``k c`` for ``r <= 3 c``, 20 % up to
+``30 c``, where it is 0.7 % of the force; 64 facets 1.0 % and 2.6 %). Some ``k_m`` are
+negative (they shape the start of contact); the stiffness of every reachable state, a prefix
+of the ramps of each facet, is not (checked).
 """
 
 from __future__ import annotations
@@ -42,8 +43,10 @@ import numpy as np
 
 from ..errors import ModelError
 
-#: ramps per facet (default) and the span of their offsets above the clearance, in clearances
+#: ramps per facet (default, most) and the span of their offsets above the clearance, in
+#: clearances
 RAMPS = 4
+MAX_RAMPS = 12
 SPREAD = 1.0
 #: the fit's range of radial deflections, in clearances (R4)
 FIT_RANGE = 3.0
@@ -71,8 +74,8 @@ def polygon_ramps(clearance: float, stiffness: float, facets: int,
     """``(offsets, stiffnesses)`` of the ``ramps`` contacts of each of ``facets`` facets that
     stand in for a round clearance ``clearance`` (m) of radial stiffness ``stiffness``
     (N/m), by (R3)-(R4). Stiffnesses are per contact (N/m)."""
-    if not (isinstance(ramps, int) and 1 <= ramps <= 12):
-        raise ModelError("ramps", f"= {ramps!r}: must be an integer in 1..12")
+    if not (isinstance(ramps, int) and 1 <= ramps <= MAX_RAMPS):
+        raise ModelError("ramps", f"= {ramps!r}: must be an integer in 1..{MAX_RAMPS}")
     c, k = float(clearance), float(stiffness)
     cm = ramp_offsets(c, ramps)
     if ramps == 1:
@@ -91,3 +94,27 @@ def polygon_ramps(clearance: float, stiffness: float, facets: int,
     if np.any(np.cumsum(x) < -1e-12 * abs(k)):
         raise ModelError("ramps", f"= {ramps}: the fitted ramps give a negative stiffness")
     return cm, x / facets
+
+
+def ridge_force(d: np.ndarray, clearance: float, stiffness: float, facets: int,
+                ramps: int = RAMPS) -> np.ndarray:
+    """(R2): the force (N, pushing back) of the facet ramps on deflections ``d`` (..., 2), m."""
+    offsets, kms = polygon_ramps(clearance, stiffness, facets, ramps)
+    a = 2.0 * math.pi * np.arange(facets) / facets
+    nrm = np.stack([np.cos(a), np.sin(a)], axis=1)  # (N, 2)
+    p = np.asarray(d, dtype=float) @ nrm.T  # (..., N)
+    push = (np.maximum(p[..., None] - offsets, 0.0) * kms).sum(axis=-1)  # (..., N)
+    return -(push @ nrm)
+
+
+def force_law_error(facets: int, ramps: int = RAMPS, r_max: float = FIT_RANGE,
+                    n_r: int = 81, n_angle: int = 9) -> float:
+    """Largest difference between (R2) and the round law (R1) over ``c <= |d| <= r_max c``
+    and every direction (one facet's sector, by symmetry), in units of ``k c``."""
+    c, k = 1.0, 1.0
+    r = np.linspace(c, r_max * c, n_r)
+    phi = np.linspace(0.0, 2.0 * math.pi / facets, n_angle)
+    d = np.stack(np.broadcast_arrays(r[:, None] * np.cos(phi), r[:, None] * np.sin(phi)),
+                 axis=-1)
+    f_round = -k * (r - c)[:, None, None] * d / r[:, None, None]
+    return float(np.abs(ridge_force(d, c, k, facets, ramps) - f_round).max() / (k * c))

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 from ..errors import ModelError
 from . import validate as v
+from .clearance import MAX_RAMPS
 
 DOF_LEVELS = ("torsional", "planar", "full")
 #: local coordinates of each level, as indices into (x, y, z, rx, ry, theta)
@@ -306,8 +307,8 @@ class Bearing:
         if self.facets > MAX_FACETS:
             raise ModelError(f"{f}.facets", f"= {self.facets}: must be <= {MAX_FACETS}")
         self.ramps = v.integer(f"{f}.ramps", self.ramps, minimum=1)
-        if self.ramps > 12:
-            raise ModelError(f"{f}.ramps", f"= {self.ramps}: must be <= 12")
+        if self.ramps > MAX_RAMPS:
+            raise ModelError(f"{f}.ramps", f"= {self.ramps}: must be <= {MAX_RAMPS}")
         if self.clearance_shape != "axes":
             for label, d in (("clearance", self.clearance), ("stiffness", self.stiffness),
                              ("damping", self.damping)):
