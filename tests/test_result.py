@@ -66,3 +66,35 @@ def test_symmetric_stage_shares_load_equally():
     ls = sim.load_sharing().iloc[1:]
     np.testing.assert_allclose(ls.factor, 1.0, rtol=1e-7)
     assert sim.double_contact().empty
+
+
+def test_tables_are_built_when_read_and_survive_pickling(clearance_run):
+    """The five tables are built from the run's arrays on first read (a study reading only
+    the event log does not pay for the force table), agree with the contact states and the
+    event rows of the kernel, and a pickled result carries them all."""
+    import pickle
+
+    sc = load_scene("studies/scenes/planetary_double_contact.toml")
+    sc.t_end = 0.02
+    sim = sc.simulate()
+    assert "_forces" not in sim.__dict__ or sim.__dict__["_forces"] is None
+    ev = sim.events
+    assert list(ev.columns) == gm.integrate.result.EVENT_COLUMNS
+    assert set(ev.state_after) <= {"open", "closed"} and len(ev) > 10
+    assert (ev.state_before != ev.state_after).all()
+    # every logged change is seen in the contact states at the output times around it
+    st = sim.contact_state
+    for r in ev.head(20).itertuples():
+        # the first output time after the event (row 0 is the state before any change)
+        k = int(np.searchsorted(sim.t, r.time, side="right"))
+        name = f"{r.element}:{r.contact}"
+        later = ev[(ev.element == r.element) & (ev.contact == r.contact) & (ev.time > r.time)
+                   & (ev.time <= sim.t[k])]
+        if len(later) == 0:  # no further change of this contact before that output time
+            assert bool(st[name].iloc[k]) == (r.state_after == "closed")
+    back = pickle.loads(pickle.dumps(sim))
+    for name in sim.TABLES:
+        a, b = getattr(sim, name), getattr(back, name)
+        assert a.equals(b), name
+    sim.forces = None  # rebuilt from the arrays when next read
+    assert sim.forces.equals(back.forces)

@@ -201,7 +201,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         X, S, ev, st = runner(system, dt, k1 - k0, F, x, s, **options)
         system.__dict__.pop("_exact_integrators", None)  # the segment is closed
         off = k0 * dt
-        events += [(te + off, *rest) for te, *rest in ev]
+        events.append(_shift(ev, off))
         Xs.append(X if not Xs else X[1:])
         Ss.append(S if not Ss else S[1:])
         x, s = X[-1].copy(), S[-1].copy()
@@ -210,6 +210,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
                 stats_all[key] = stats_all.get(key, 0) + val
         seg_systems.append((k0, k1, system, seg_casm, U))
     X, S = np.concatenate(Xs), np.concatenate(Ss)
+    events = event_array(events)
     stats = {**stats_all, "cpu_s": time.process_time() - cpu, "n_events": len(events),
              "n_steps": n_steps, "n_freezes": len(segments)}
     result = _result([sg[:3] for sg in seg_systems], t, X, S, events, s_init, stats,
@@ -227,6 +228,21 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     if casm is not None:
         _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm)
     return result
+
+
+def _shift(ev, offset: float) -> np.ndarray:
+    """A runner's events (tuples or an (n, 6) array: time, contact, before, after, rate,
+    force) as a new (n, 6) float array with the times shifted by ``offset`` (s)."""
+    a = np.array(ev, dtype=float).reshape(-1, 6)
+    a[:, 0] += offset
+    return a
+
+
+def event_array(chunks) -> np.ndarray:
+    """One (n, 6) float array of event rows from a list of arrays and single-event tuples
+    (:func:`reconcile` appends tuples), in the order given."""
+    parts = [np.asarray(c, dtype=float).reshape(-1, 6) for c in chunks]
+    return np.concatenate(parts) if parts else np.empty((0, 6))
 
 
 def reconcile(system: PiecewiseLinearSystem, x: np.ndarray, s: np.ndarray, t: float,
@@ -289,70 +305,107 @@ def _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm) -> None:
 
 
 def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResult:
+    """The :class:`SimulationResult` of a run: its tables are built on first read
+    (:class:`_Tables`). ``events``: (n, 6) rows or a list of tuples (:func:`event_array`)."""
     system = seg_systems[0][2]
-    asm = system.asm
-    n = system.n
-    q = pd.DataFrame(X[:, :n], index=pd.Index(t, name="time"), columns=asm.dof_names)
-    v = pd.DataFrame(X[:, n:], index=q.index, columns=asm.dof_names)
-    c = asm.contacts
-    P = np.empty((len(t), system.n_contacts))
-    R = np.empty_like(P)
-    for k0, k1, sy in seg_systems:  # each segment with the geometry it was frozen at
-        P[k0:k1 + 1] = X[k0:k1 + 1, :n] @ sy.W.T - sy.offset
-        R[k0:k1 + 1] = X[k0:k1 + 1, n:] @ sy.W.T
-    Fc = np.where(S, system.k * P + system.c * R, 0.0)
-    # one column per mesh flank, one per bearing direction (its two dead-band sides combined;
-    # a polygon's facet forces resolved on the bearing's x and y axes)
-    names: dict[str, int] = {}
-    cols, rows_, weights = [], [], []
-    for e, (el, ct, kind) in enumerate(zip(c.element, c.contact, c.kind, strict=True)):
-        if kind == "mesh":
-            parts = [(f"{el}.{ct}", 1.0)]
-        elif np.isfinite(c.angle[e]):
-            parts = [(f"{el}.x", math.cos(c.angle[e])), (f"{el}.y", math.sin(c.angle[e]))]
-        else:
-            parts = [(f"{el}.{ct[:-1]}", 1.0 if ct.endswith("+") else -1.0)]
-        for key, wgt in parts:
-            rows_.append(e)
-            cols.append(names.setdefault(key, len(names)))
-            weights.append(wgt)
-    proj = np.zeros((len(c.element), len(names)))
-    np.add.at(proj, (np.array(rows_, dtype=np.int64), np.array(cols, dtype=np.int64)),
-              np.array(weights))
-    blocks, labels = [Fc @ proj], list(names)
-    sp = asm.springs
-    if sp is not None and len(sp):
-        Fs = np.empty((len(t), len(sp)))
-        for k0, k1, sy in seg_systems:
-            w = sy.asm.springs.W
-            Fs[k0:k1 + 1] = ((X[k0:k1 + 1, :n] @ w.T) * sp.stiffness
-                             + (X[k0:k1 + 1, n:] @ w.T) * sp.damping)
-        blocks.append(Fs)
-        labels += [f"{el}.{ct}" for el, ct in zip(sp.element, sp.contact, strict=True)]
-    rd = asm.round
-    if rd is not None and len(rd):  # round clearances (scipy): k (r - c) + c_d r' while r > c
-        from .scipy_ref import _Round
-
-        Fr = np.empty((len(t), len(rd)))
-        for k0, k1, sy in seg_systems:
-            rr = _Round(sy)
-            Xs = X[k0:k1 + 1]
-            Fr[k0:k1 + 1] = rr.forces(Xs, rr.radius(Xs) > rr.c).reshape(len(Xs), -1)
-        blocks.append(Fr)
-        labels += [f"{el}.{ct}" for el, ct in zip(rd.element, rd.contact, strict=True)]
-    # a bearing direction is a spring or a dead band, never both: the labels are distinct
-    forces = pd.DataFrame(np.concatenate(blocks, axis=1), index=q.index, columns=labels)
-    nc = len(c.element)
-
-    def where(e):
-        if e < nc:
-            return c.element[e], c.contact[e]
-        return asm.round.element[2 * (e - nc)], "radial"  # a round clearance (scipy)
-
-    rows = [(te, *where(e), "closed" if b else "open",
-             "closed" if a else "open", r, f) for te, e, b, a, r, f in events]
-    ev = pd.DataFrame(rows, columns=EVENT_COLUMNS)
-    state = pd.DataFrame(S, index=q.index, columns=system.names)
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
-    return SimulationResult(t=t, q=q, v=v, forces=forces, events=ev, contact_state=state,
-                            settings=settings, initial_state=init, stats=stats)
+    tables = _Tables(seg_systems, t, X, S, event_array([events]) if len(events) else
+                     np.empty((0, 6)))
+    return SimulationResult(t=t, settings=settings, initial_state=init, stats=stats,
+                            tables=tables)
+
+
+class _Tables:
+    """Builds a run's tables from its arrays (:class:`SimulationResult` asks for each when it is
+    first read): ``q``, ``v``, ``forces``, ``events``, ``contact_state``."""
+
+    def __init__(self, seg_systems, t, X, S, events: np.ndarray):
+        self.seg_systems, self.t, self.X, self.S, self.ev = seg_systems, t, X, S, events
+        self.system = seg_systems[0][2]
+        self.index = pd.Index(t, name="time")
+
+    def __call__(self, name: str) -> pd.DataFrame:
+        return getattr(self, name)()
+
+    def q(self) -> pd.DataFrame:
+        sy = self.system
+        return pd.DataFrame(self.X[:, :sy.n], index=self.index, columns=sy.asm.dof_names)
+
+    def v(self) -> pd.DataFrame:
+        sy = self.system
+        return pd.DataFrame(self.X[:, sy.n:], index=self.index, columns=sy.asm.dof_names)
+
+    def contact_state(self) -> pd.DataFrame:
+        return pd.DataFrame(self.S, index=self.index, columns=self.system.names)
+
+    def events(self) -> pd.DataFrame:
+        c = self.system.asm.contacts
+        rd = self.system.asm.round
+        # contacts, then a round clearance per bearing (scipy; its x row names the bearing)
+        element = list(c.element) + (list(rd.element[::2]) if rd is not None else [])
+        contact = list(c.contact) + ["radial"] * (len(element) - len(c.element))
+        ev = self.ev
+        e = ev[:, 1].astype(np.int64)
+        state = np.array(["open", "closed"], dtype=object)
+        return pd.DataFrame({
+            "time": ev[:, 0],
+            "element": np.array(element, dtype=object)[e],
+            "contact": np.array(contact, dtype=object)[e],
+            "state_before": state[(ev[:, 2] > 0.5).astype(np.int64)],
+            "state_after": state[(ev[:, 3] > 0.5).astype(np.int64)],
+            "gap_rate": ev[:, 4],
+            "force_after": ev[:, 5]}, columns=EVENT_COLUMNS)
+
+    def forces(self) -> pd.DataFrame:
+        seg_systems, t, X, S = self.seg_systems, self.t, self.X, self.S
+        system = self.system
+        asm = system.asm
+        n = system.n
+        c = asm.contacts
+        P = np.empty((len(t), system.n_contacts))
+        R = np.empty_like(P)
+        for k0, k1, sy in seg_systems:  # each segment with the geometry it was frozen at
+            P[k0:k1 + 1] = X[k0:k1 + 1, :n] @ sy.W.T - sy.offset
+            R[k0:k1 + 1] = X[k0:k1 + 1, n:] @ sy.W.T
+        Fc = np.where(S, system.k * P + system.c * R, 0.0)
+        # one column per mesh flank, one per bearing direction (its two dead-band sides
+        # combined; a polygon's facet forces resolved on the bearing's x and y axes)
+        names: dict[str, int] = {}
+        cols, rows_, weights = [], [], []
+        for e, (el, ct, kind) in enumerate(zip(c.element, c.contact, c.kind, strict=True)):
+            if kind == "mesh":
+                parts = [(f"{el}.{ct}", 1.0)]
+            elif np.isfinite(c.angle[e]):
+                parts = [(f"{el}.x", math.cos(c.angle[e])), (f"{el}.y", math.sin(c.angle[e]))]
+            else:
+                parts = [(f"{el}.{ct[:-1]}", 1.0 if ct.endswith("+") else -1.0)]
+            for key, wgt in parts:
+                rows_.append(e)
+                cols.append(names.setdefault(key, len(names)))
+                weights.append(wgt)
+        proj = np.zeros((len(c.element), len(names)))
+        np.add.at(proj, (np.array(rows_, dtype=np.int64), np.array(cols, dtype=np.int64)),
+                  np.array(weights))
+        blocks, labels = [Fc @ proj], list(names)
+        sp = asm.springs
+        if sp is not None and len(sp):
+            Fs = np.empty((len(t), len(sp)))
+            for k0, k1, sy in seg_systems:
+                w = sy.asm.springs.W
+                Fs[k0:k1 + 1] = ((X[k0:k1 + 1, :n] @ w.T) * sp.stiffness
+                                 + (X[k0:k1 + 1, n:] @ w.T) * sp.damping)
+            blocks.append(Fs)
+            labels += [f"{el}.{ct}" for el, ct in zip(sp.element, sp.contact, strict=True)]
+        rd = asm.round
+        if rd is not None and len(rd):  # round clearances (scipy): k (r - c) + c_d r' if r > c
+            from .scipy_ref import _Round
+
+            Fr = np.empty((len(t), len(rd)))
+            for k0, k1, sy in seg_systems:
+                rr = _Round(sy)
+                Xs = X[k0:k1 + 1]
+                Fr[k0:k1 + 1] = rr.forces(Xs, rr.radius(Xs) > rr.c).reshape(len(Xs), -1)
+            blocks.append(Fr)
+            labels += [f"{el}.{ct}" for el, ct in zip(rd.element, rd.contact, strict=True)]
+        # a bearing direction is a spring or a dead band, never both: the labels are distinct
+        return pd.DataFrame(np.concatenate(blocks, axis=1), index=self.index, columns=labels)

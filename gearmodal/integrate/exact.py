@@ -132,7 +132,8 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     ``F_grid`` (n_steps + 1, n) is the generalised force at the output times (linear in
     between); with an input basis on the system it must lie in it (checked). Returns
     ``(X, S, events, stats)``: states (n_steps + 1, 2n), contact states
-    (n_steps + 1, n_contacts), events as tuples (time, contact, before, after, rate, force).
+    (n_steps + 1, n_contacts), events as rows (time, contact, before, after, rate, force):
+    an (n, 6) array from the Taylor propagator, a list of tuples from ``"expm"``.
 
     ``propagator``: ``"taylor"`` (default) sums the Taylor series of the exact solution in
     numba from every event and over pieces of ``rho h <= 2`` (:mod:`gearmodal.integrate.taylor`;

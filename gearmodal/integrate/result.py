@@ -24,7 +24,23 @@ def _stage_of(element: str) -> str:
     return element.rsplit(".", 1)[0] if "." in element else ""
 
 
-@dataclass
+def _table(name: str, doc: str) -> property:
+    """A table of the result, built from the run's arrays on first read (then kept)."""
+    attr = "_" + name
+
+    def get(self):
+        val = self.__dict__.get(attr)
+        if val is None and self.__dict__.get("tables") is not None:
+            val = self.__dict__[attr] = self.tables(name)
+        return val
+
+    def set_(self, val):  # None: built (again) from the run's arrays when next read
+        self.__dict__[attr] = val
+
+    return property(get, set_, doc=doc)
+
+
+@dataclass(repr=False)
 class SimulationResult:
     """Result of :func:`gearmodal.simulate`.
 
@@ -43,25 +59,53 @@ class SimulationResult:
         switch), ``force_after`` (N, the contact force just after the switch).
     contact_state : DataFrame of booleans (closed) per contact at the output times.
     settings : the settings that made the run (method, dt, options).
+    initial_state : ``{contact name: closed}`` at ``t[0]``.
+    stats : counters and CPU time of the run (``cpu_s`` is the integration; the tables are
+        not in it, see below).
     constraint_forces : coupled systems (:class:`gearmodal.Coupled`) only: the Lagrange
         multipliers, one column per constraint row (N or N m), i.e. the forces the constraints
         transmit (for a joint: the force on body ``b`` in joint axes).
     constraint_residual : coupled systems only: the exact residual ``g`` of every constraint
         row along the trajectory (m or rad; rounding for linear constraints, second order for
         linearised joints).
+
+    The five tables (``q``, ``v``, ``forces``, ``events``, ``contact_state``) are built from
+    the run's arrays when first read and then kept, so a study that reads only the event log
+    does not pay for the force table (~0.1-0.5 ms each for a short run; pandas). Assigning a
+    table replaces it (``None``: rebuilt when next read). Pickling and
+    ``dataclasses.replace`` build them all.
     """
 
     t: np.ndarray
-    q: pd.DataFrame
-    v: pd.DataFrame
-    forces: pd.DataFrame
-    events: pd.DataFrame
-    contact_state: pd.DataFrame
+    q: pd.DataFrame | None = None
+    v: pd.DataFrame | None = None
+    forces: pd.DataFrame | None = None
+    events: pd.DataFrame | None = None
+    contact_state: pd.DataFrame | None = None
     settings: dict = field(default_factory=dict)
     initial_state: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
     constraint_forces: pd.DataFrame | None = None
     constraint_residual: pd.DataFrame | None = None
+    #: ``tables(name) -> DataFrame`` builds the tables not given (see the class docstring)
+    tables: object = field(default=None, repr=False, compare=False)
+
+    TABLES = ("q", "v", "forces", "events", "contact_state")
+
+    def __post_init__(self):
+        for name in self.TABLES:
+            if self.__dict__.get("_" + name) is None and self.tables is None:
+                raise TypeError(f"SimulationResult needs {name!r} (or tables=...)")
+
+    def __getstate__(self):
+        for name in self.TABLES:  # build what is still lazy: the builder holds the systems
+            getattr(self, name)
+        return {**self.__dict__, "tables": None}
+
+    def __repr__(self) -> str:
+        return (f"SimulationResult({len(self.t)} times to {self.t[-1]:.6g} s, "
+                f"{self.stats.get('n_events', '?')} events, "
+                f"method={self.settings.get('method', '?')!r})")
 
     # -- contact intervals ---------------------------------------------------------------
     def _intervals(self) -> dict[str, list[tuple[float, float]]]:
@@ -210,3 +254,13 @@ class SimulationResult:
         (d / "settings.json").write_text(json.dumps(
             {**self.settings, "stats": self.stats}, indent=2, default=str))
         return d
+
+
+for _name, _doc in (
+        ("q", "Displacements (m, rad) by DOF name, indexed by time (s)."),
+        ("v", "Velocities (m/s, rad/s) by DOF name, indexed by time (s)."),
+        ("forces", "Contact and spring forces (N, N m) by element, indexed by time (s)."),
+        ("events", "The contact-state event log, one row per change."),
+        ("contact_state", "Closed (True) per contact at the output times.")):
+    # after the dataclass is made: its __init__ assigns through these (a None keeps it lazy)
+    setattr(SimulationResult, _name, _table(_name, _doc))

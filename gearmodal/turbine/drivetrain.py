@@ -58,7 +58,7 @@ import pandas as pd
 import scipy.linalg as sla
 
 from ..errors import ModelError
-from ..integrate import METHODS, SimulationResult, _result, reconcile
+from ..integrate import METHODS, SimulationResult, _result, _shift, event_array, reconcile
 from ..integrate.refreeze import AzimuthAssembler, QuasiStatic
 from ..integrate.system import PiecewiseLinearSystem
 from ..static import equilibrium
@@ -365,7 +365,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                                                       + psi_f + mount)
             om_grid[kk + a0:k * m_sub + j_end + 1] = om_f
             X, S, ev, st = runner(system, dt, j_end - j, F, x, s, **options)
-            events += [(te + tj, *rest) for te, *rest in ev]
+            events.append(_shift(ev, tj))
             if not Ss:  # the initial state (the accelerating equilibrium)
                 Ss.append(S[:1])
                 Xs.append(X[:1])
@@ -382,6 +382,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         if progress is not None:
             progress(k + 1, n_aero)
     X, S = np.concatenate(Xs), np.concatenate(Ss)
+    events = event_array(events)
     t_grid = np.arange(n_steps + 1) * dt
     cpu = time.process_time() - cpu0
     clock["gearbox_s"] = cpu - clock["aero_s"] - clock["wind_s"] - clock["wind_setup_s"]
