@@ -4,8 +4,10 @@ Floating-frame gear models (torsional, planar or full DOF per component), assemb
 piecewise-linear contact model, modal and Campbell analysis. SI units throughout.
 """
 
-from . import io, turbine  # noqa: F401  (gm.io.read_loads, gm.turbine.Wind, ...)
+from . import auto, io, turbine  # noqa: F401  (gm.io.read_loads, gm.turbine.Wind, ...)
 from .assembly import Assembly, assemble
+from .auto import FidelityChoice
+from .auto import choose as choose_fidelity
 from .campbell import CampbellResult, campbell
 from .coupling import (
     Constraint,
@@ -43,10 +45,11 @@ from .studies import sweep
 __version__ = "0.1.0"
 
 __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Constraint", "Coupled",
-           "CoupledAssembly", "Equilibrium", "Frame", "Joint", "LinearConstraint",
+           "CoupledAssembly", "Equilibrium", "FidelityChoice", "Frame", "Joint", "LinearConstraint",
            "LinearSystem", "ModelSystem", "System",
            "Gear", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
            "SimulationResult", "simulate",
-           "assemble", "balance", "campbell", "drivetrain", "equilibrium", "gear_pair",
+           "assemble", "balance", "campbell", "choose_fidelity", "drivetrain", "equilibrium",
+           "gear_pair",
            "lin_parker_stage", "load", "loads", "modal", "parallel_stage", "planetary_stage",
            "sweep"]

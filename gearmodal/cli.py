@@ -110,12 +110,23 @@ def cmd_simulate(args) -> int:
         if scene.wind is not None and scene.wind.duration < args.t_end:
             scene.wind.duration = args.t_end + 1.0
     run = None
-    if scene.turbine is not None:
-        from tqdm import tqdm
+    from tqdm import tqdm
 
+    if scene.method == "auto":  # the step ladder, one bar step per rung (gearmodal.auto)
+        from .auto import choose, chosen_result
+
+        with tqdm(desc=f"auto, tolerance {scene.tolerance:g}: rungs", unit="rung",
+                  disable=args.quiet) as bar:
+            res = chosen_result(choose(scene, scene.tolerance,
+                                       progress=lambda *_: bar.update(1)), "scene.tolerance")
+    elif scene.turbine is not None:
         with tqdm(total=int(round(scene.t_end / scene.drivetrain.get("aero_dt", 0.02))),
                   desc="turbine + gearbox", unit="step", disable=args.quiet) as bar:
-            run = scene.simulate(progress=lambda i, n: bar.update(1))
+            res = scene.simulate(progress=lambda i, n: bar.update(1))
+    else:
+        res = scene.simulate()
+    if scene.turbine is not None:
+        run = res
         sim = run.gearbox
         out = run.save(args.out)
         fig = run.plot()
@@ -125,8 +136,18 @@ def cmd_simulate(args) -> int:
         fig.savefig(out / "turbine.png", dpi=130)
         plt.close(fig)
     else:
-        sim = scene.simulate()
+        sim = res
         out = sim.save(args.out)
+    auto = getattr(res, "auto", None)
+    if auto is not None:
+        auto.save(out)
+        fig = auto.plot()
+        fig.savefig(out / "auto.png", dpi=130)
+        plt.close(fig)
+        st = auto.settings
+        print(f"auto: rung {auto.rung} of {len(auto.table)} run, dt {st['dt']:.6g} s"
+              + (f", refreeze {st['refreeze_deg']:.6g} deg" if "refreeze_deg" in st else "")
+              + f" (within {auto.tol:g} of the next two finer rungs); wrote {out}/auto.csv")
     fig = sim.plot()
     fig.savefig(out / "forces.png", dpi=130)
     plt.close(fig)

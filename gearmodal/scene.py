@@ -6,8 +6,9 @@ Example (``studies/scenes/gear_rattle.toml``)::
     model = "../models/gear_pair.toml"   # path relative to this file
     t_end = 0.2                          # s
     dt = 1e-4                            # s, propagation and output step
-    method = "exact"                     # exact | newmark | scipy
+    method = "exact"                     # exact | newmark | scipy | auto
     speed_rpm = 0.0                      # input speed at which speed terms are frozen
+    tolerance = 0.05                     # method = "auto" only: relative, on the quantities
 
     [loads]                              # N or N m, by load name
     "pinion.torque" = { mean = 2.0, amplitude = 6.0, frequency_hz = 80.0 }
@@ -59,7 +60,7 @@ from .errors import ModelError
 from .model import validate as v
 from .model.model import Model
 
-_SCENE_KEYS = {"model", "t_end", "dt", "method", "speed_rpm"}
+_SCENE_KEYS = {"model", "t_end", "dt", "method", "speed_rpm", "tolerance"}
 _TOP = {"scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind"}
 _TURBINE_KEYS = {"file", "rotor_speed0_rpm", "azimuth0_deg", "connected",
                  "mounting_azimuth_deg", "aero_dt", "aero_hold", "refreeze_deg",
@@ -85,12 +86,22 @@ class Scene:
     turbine: object = None  # gearmodal.turbine.Turbine when the scene has [turbine]
     wind: object = None
     drivetrain: dict = field(default_factory=dict)
+    tolerance: float = 0.05
 
     def simulate(self, progress=None):
         """Run the scene: :func:`gearmodal.simulate` on the model with the scene's loads, or,
         with a ``[turbine]`` table, :func:`gearmodal.turbine.simulate_drivetrain` (returns a
         :class:`~gearmodal.turbine.DrivetrainResult`). ``progress(i, n)`` is passed to the
-        turbine run."""
+        turbine run.
+
+        ``method = "auto"`` runs the step ladder of :func:`gearmodal.auto.choose` with the
+        scene's ``tolerance`` and returns the chosen rung's result, the choice attached as
+        ``result.auto`` (``progress(rung, settings, row)`` after each rung)."""
+        if self.method == "auto":
+            from .auto import choose, chosen_result
+
+            return chosen_result(choose(self, self.tolerance, progress=progress),
+                                 "scene.tolerance")
         if self.turbine is not None:
             from .turbine import simulate_drivetrain
 
@@ -174,7 +185,16 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
         raise
     t_end = v.positive("scene.t_end", sc["t_end"], "s")
     dt = v.positive("scene.dt", sc["dt"], "s")
-    method = v.choice("scene.method", sc.get("method", "exact"), ("exact", "newmark", "scipy"))
+    method = v.choice("scene.method", sc.get("method", "exact"),
+                      ("exact", "newmark", "scipy", "auto"))
+    tolerance = 0.05
+    if "tolerance" in sc:
+        if method != "auto":
+            raise ModelError("scene.tolerance", "is used by method = 'auto' only")
+        tolerance = v.number("scene.tolerance", sc["tolerance"], "relative")
+        if not 0 < tolerance < 10:
+            raise ModelError("scene.tolerance", f"= {tolerance!r}: must be a relative "
+                             "tolerance in (0, 10), e.g. 0.05")
     speed = v.nonnegative("scene.speed_rpm", sc.get("speed_rpm", 0.0), "rpm")
     loads, means, balance = {}, {}, None
     if "load_file" in doc:
@@ -219,7 +239,7 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
         raise ModelError("wind", "needs a [turbine] table")
     return Scene(model=model, t_end=t_end, dt=dt, method=method, speed_rpm=speed, loads=loads,
                  q0=q0, v0=v0, options=options, source=str(p), turbine=turbine, wind=wind,
-                 drivetrain=drivetrain)
+                 drivetrain=drivetrain, tolerance=tolerance)
 
 
 def _load_file(spec: dict, p: Path) -> dict:

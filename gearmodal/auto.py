@@ -1,0 +1,240 @@
+"""``method="auto"``: the cheapest rung of the step ladder whose engineering quantities are
+converged to a requested tolerance, chosen by running the ladder (issue "fidelity ladder",
+item 3).
+
+The rule
+--------
+Rung ``l = 0, 1, ...`` runs the scene with the exact method and its step ``dt`` (and, when the
+scene refreezes a turning geometry, its refreeze angle) multiplied by ``coarsest / 2^l``:
+rung 0 is ``coarsest`` times coarser than the scene, each next rung halves both. Of every rung
+the quantities engineers use are taken (:data:`QUANTITIES`, from
+:func:`gearmodal.studies.summarize`), and
+
+    d(l, m) = max over the quantities of |Q_l - Q_m| / |Q_m|                          (A1)
+
+is rung ``l``'s difference from a finer rung ``m`` (a quantity that is zero, or undefined, in
+both counts as agreeing; in one only, as infinitely far). The choice is the **cheapest rung
+that agrees within ``tol`` with each of the next two finer rungs**:
+
+    l* = min { l : d(l, l + 1) <= tol  and  d(l, l + 2) <= tol }                      (A2)
+
+Rungs are run from the coarsest until (A2) holds or ``levels`` rungs have run. Two finer
+rungs, not one, because a single agreement can be chance where the coarse rungs drive spurious
+dynamics: on the paper's turbine scene a refreeze angle above a threshold kicks the carrier
+floating in its clearance into a rattle, the threshold moves from run to run, and a coarse
+pair can agree while both are wrong (``benchmarks/RESULTS.md``, "Fidelity ladder"). With the
+converged quantities changing geometrically from rung to rung, (A2) bounds rung ``l*``'s
+distance from the finest rung run by ``tol``, and from the limit by about ``tol`` for any
+convergence faster than linear in the step.
+
+What it cannot do: a scene whose quantities are not reproducible to ``tol`` (a chaotic
+rattle: two runs differing by rounding move single-run peaks by ~1-2 % on the paper's
+turbine case) never satisfies (A2); the choice then reports ``met = False`` with the table of
+what was run, and a scene run with ``method = "auto"`` raises naming ``scene.tolerance``.
+The ladder refines the numerical settings only; the model's own fidelity (clearance shape,
+DOF level) is the scene's choice.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .errors import ModelError
+
+#: the quantities of the paper's double-contact study compared between rungs
+QUANTITIES = ("max_front_force_N", "max_planet_bearing_force_N", "double_contact_time_s",
+              "peak_load_sharing_factor")
+#: default tolerance of ``method = "auto"`` (relative, on every quantity)
+DEFAULT_TOL = 0.05
+
+
+def difference(a: dict, b: dict, quantities=QUANTITIES) -> float:
+    """(A1): the largest relative difference of the quantities of ``a`` from those of ``b``
+    (the finer rung)."""
+    worst = 0.0
+    for q in quantities:
+        x, y = float(a.get(q, math.nan)), float(b.get(q, math.nan))
+        if not (math.isfinite(x) and math.isfinite(y)):
+            d = 0.0 if (math.isnan(x) and math.isnan(y)) else math.inf
+        elif y == 0.0:
+            d = 0.0 if x == 0.0 else math.inf
+        else:
+            d = abs(x - y) / abs(y)
+        worst = max(worst, d)
+    return worst
+
+
+def _settings(scene) -> dict:
+    """The scene's refinable settings: ``dt`` and, if it refreezes, ``refreeze_deg``."""
+    out = {"dt": float(scene.dt)}
+    if scene.turbine is not None:
+        out["refreeze_deg"] = float(scene.drivetrain.get("refreeze_deg", 1.0))
+    elif scene.speed_rpm > 0:
+        from .integrate import rotating_geometry
+
+        if rotating_geometry(scene.model):
+            out["refreeze_deg"] = float(scene.options.get("refreeze_deg", 2.0))
+    return out
+
+
+def _rung_scene(scene, settings: dict):
+    sc = copy.copy(scene)
+    sc.method = "exact"
+    sc.dt = settings["dt"]
+    sc.drivetrain = dict(scene.drivetrain)
+    sc.options = dict(scene.options)
+    if "refreeze_deg" in settings:
+        if scene.turbine is not None:
+            sc.drivetrain["refreeze_deg"] = settings["refreeze_deg"]
+        else:
+            sc.options["refreeze_deg"] = settings["refreeze_deg"]
+    return sc
+
+
+@dataclass
+class FidelityChoice:
+    """What :func:`choose` ran and chose.
+
+    Attributes
+    ----------
+    met : whether a rung satisfied the rule (A2).
+    rung : index of the chosen rung in ``table`` (``None`` if not ``met``).
+    settings : the chosen rung's settings (``dt`` in s, ``refreeze_deg`` in deg if the scene
+        refreezes), to put in the scene for further runs.
+    result : the chosen rung's result (``None`` if not ``met``).
+    table : one row per rung run: ``rung``, ``dt``, [``refreeze_deg``], ``cpu_s``,
+        ``n_events``, the quantities, ``diff_next`` = d(l, l + 1) and ``diff_next2`` =
+        d(l, l + 2) of (A1) (NaN where that rung was not run), ``chosen``.
+    tol : the tolerance asked for.
+    """
+
+    met: bool
+    rung: int | None
+    settings: dict
+    result: object
+    table: pd.DataFrame
+    tol: float
+    quantities: tuple = QUANTITIES
+    results: list = field(default_factory=list, repr=False)
+
+    def to_frame(self) -> pd.DataFrame:
+        return self.table.copy()
+
+    def save(self, directory) -> Path:
+        """Write ``auto.csv`` (the table) and ``auto.json`` (tolerance, rule, choice)."""
+        d = Path(directory)
+        d.mkdir(parents=True, exist_ok=True)
+        self.table.to_csv(d / "auto.csv", index=False)
+        (d / "auto.json").write_text(json.dumps(
+            {"tol": self.tol, "met": self.met, "rung": self.rung, "settings": self.settings,
+             "quantities": list(self.quantities),
+             "rule": "cheapest rung within tol of each of the next two finer rungs "
+                     "(gearmodal/auto.py, A1-A2)"}, indent=2))
+        return d
+
+    def plot(self, ax=None):
+        """Each quantity against the rung's step, relative to the finest rung run; the
+        tolerance band and the chosen rung marked. Returns the matplotlib Figure."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            fig, ax = plt.subplots(figsize=(6.5, 4.0))
+        else:
+            fig = ax.figure
+        t = self.table
+        for q in self.quantities:
+            ref = t[q].iloc[-1]
+            if ref and np.isfinite(ref):
+                ax.plot(t["dt"], t[q] / ref, "o-", label=q, lw=1)
+        ax.axhspan(1 - self.tol, 1 + self.tol, color="0.9", zorder=0, label=f"tol {self.tol:g}")
+        if self.rung is not None:
+            ax.axvline(t["dt"].iloc[self.rung], color="k", lw=0.8, ls="--", label="chosen")
+        ax.set_xscale("log")
+        ax.set_xlabel("dt [s] (refreeze angle scaled with it)")
+        ax.set_ylabel("quantity / finest rung")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        return fig
+
+
+def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: int = 6,
+           quantities=QUANTITIES, progress=None) -> FidelityChoice:
+    """Run the step ladder of ``scene`` from ``coarsest`` times its settings and choose the
+    cheapest rung converged to ``tol`` by rule (A2) of :mod:`gearmodal.auto`.
+
+    Parameters
+    ----------
+    scene : a :class:`gearmodal.scene.Scene` (its ``dt`` and refreeze angle are the scale;
+        its method is replaced by ``"exact"``).
+    tol : relative tolerance on every quantity, > 0 (0.05 = 5 %).
+    coarsest : rung 0's settings are this many times the scene's (>= 1).
+    levels : at most this many rungs are run (3 to 12); each halves the previous one's.
+    quantities : keys of :func:`gearmodal.studies.summarize` compared.
+    progress : ``progress(rung, settings, row)`` after each rung (CLI, studies).
+    """
+    from .studies import summarize
+
+    if not isinstance(tol, (int, float)) or isinstance(tol, bool) or not 0 < tol < 10:
+        raise ModelError("tol", f"= {tol!r}: must be a relative tolerance in (0, 10)")
+    if not isinstance(coarsest, (int, float)) or not coarsest >= 1:
+        raise ModelError("coarsest", f"= {coarsest!r}: must be a factor >= 1")
+    if not isinstance(levels, int) or isinstance(levels, bool) or not 3 <= levels <= 12:
+        raise ModelError("levels", f"= {levels!r}: must be an integer from 3 to 12")
+    base = _settings(scene)
+    rows, results, summaries = [], [], []
+    chosen = None
+    for level in range(levels):
+        f = coarsest / 2.0**level
+        st = {k: v * f for k, v in base.items()}
+        t0 = time.process_time()
+        res = _rung_scene(scene, st).simulate()
+        cpu = time.process_time() - t0
+        summ = summarize(res)
+        results.append(res)
+        summaries.append(summ)
+        rows.append({"rung": level, **st, "cpu_s": cpu, "n_events": summ.get("n_events"),
+                     **{q: summ.get(q, math.nan) for q in quantities}})
+        if progress is not None:
+            progress(level, st, rows[-1])
+        if level >= 2:
+            cand = level - 2
+            if (difference(summaries[cand], summaries[cand + 1], quantities) <= tol
+                    and difference(summaries[cand], summaries[cand + 2], quantities) <= tol):
+                chosen = cand
+                break
+    n = len(rows)
+    for i, r in enumerate(rows):
+        r["diff_next"] = difference(summaries[i], summaries[i + 1], quantities) \
+            if i + 1 < n else math.nan
+        r["diff_next2"] = difference(summaries[i], summaries[i + 2], quantities) \
+            if i + 2 < n else math.nan
+        r["chosen"] = i == chosen
+    table = pd.DataFrame(rows)
+    settings = {k: v for k, v in rows[chosen].items() if k in base} if chosen is not None \
+        else {}
+    return FidelityChoice(met=chosen is not None, rung=chosen, settings=settings,
+                          result=results[chosen] if chosen is not None else None,
+                          table=table, tol=float(tol), quantities=tuple(quantities),
+                          results=results)
+
+
+def chosen_result(choice: FidelityChoice, field_: str = "tol"):
+    """The chosen rung's result with the choice attached as ``result.auto``; raises
+    :class:`ModelError` naming ``field_`` when no rung met the tolerance."""
+    if not choice.met:
+        d = choice.table[["rung", "dt", "diff_next", "diff_next2"]].to_string(index=False)
+        raise ModelError(field_, f"= {choice.tol:g}: no rung of the step ladder agreed with "
+                         f"the next two finer ones within it ({len(choice.table)} rungs run):\n"
+                         f"{d}\nthe scene may not be reproducible to this tolerance (a "
+                         "chaotic rattle); raise it, or run more levels with gm.auto.choose")
+    res = choice.result
+    res.auto = choice
+    return res

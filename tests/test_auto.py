@@ -1,0 +1,98 @@
+"""method = "auto" (gearmodal.auto): the step ladder's choice meets its tolerance against a
+much finer run on the paper's cases, sized for CI: the 600 kW planetary stage of the
+double-contact study alone (``studies/scenes/planetary_double_contact.toml``, 0.3 s of rated
+torque and the rotor's shaft-end force), with the paper's ``clearance`` carrier bearing (1 mm,
+1e8 N/m: double contact) and the ``reference`` one (1e9 N/m, no clearance). The paper's
+turbine scene (30 s per rung) is run by ``benchmarks/fidelity.py --auto``."""
+
+import copy
+import math
+from pathlib import Path
+
+import pytest
+
+import gearmodal as gm
+from gearmodal.auto import QUANTITIES, difference
+from gearmodal.cli import main
+from gearmodal.errors import ModelError
+from gearmodal.scene import load_scene
+from gearmodal.studies import summarize
+
+SCENE = "studies/scenes/planetary_double_contact.toml"
+MODELS = str((Path(SCENE).parent.parent / "models").resolve())
+
+
+def scene_text() -> str:
+    """The scene file with its model path absolute (to write variants elsewhere)."""
+    return Path(SCENE).read_text(encoding="utf-8").replace('"../models/', f'"{MODELS}/')
+CASES = {"clearance": {}, "reference": {"model.planetary_stage.carrier_bearing": 1.0e9}}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_auto_choice_meets_its_tolerance_against_a_much_finer_run(case):
+    """The truth is the exact method at 1/64 of the scene's step (16x finer than the finest
+    rung: its sampled peaks moved < 1e-3 relative between 1/32 and 1/128 when measured). The
+    chosen rung must be within the tolerance of it on every quantity, and the rule must have
+    chosen the first rung satisfying (A2)."""
+    tol = 0.05
+    sc = load_scene(SCENE, CASES[case])
+    ch = gm.choose_fidelity(sc, tol)
+    assert ch.met and ch.rung is not None
+    t = ch.table
+    assert t.chosen.sum() == 1 and bool(t.chosen.iloc[ch.rung])
+    assert t.diff_next.iloc[ch.rung] <= tol and t.diff_next2.iloc[ch.rung] <= tol
+    for r in range(ch.rung):  # no cheaper rung satisfies the rule
+        assert not (t.diff_next.iloc[r] <= tol and t.diff_next2.iloc[r] <= tol)
+    assert ch.settings["dt"] == pytest.approx(t.dt.iloc[ch.rung])
+    truth_scene = copy.copy(sc)
+    truth_scene.dt = sc.dt / 64
+    truth = summarize(truth_scene.simulate())
+    chosen = summarize(ch.result)
+    assert difference(chosen, truth) <= tol, {q: (chosen[q], truth[q]) for q in QUANTITIES}
+    if case == "clearance":  # the case is a real choice: coarser rungs are off by more
+        assert ch.rung > 0 and difference(summarize(ch.results[0]), truth) > tol
+
+
+def test_scene_method_auto_returns_the_chosen_rung_and_the_cli_writes_the_table(tmp_path):
+    text = scene_text().replace('method = "exact"', 'method = "auto"\ntolerance = 0.05')
+    p = tmp_path / "auto.toml"
+    p.write_text(text)
+    sc = load_scene(p)
+    assert sc.method == "auto" and sc.tolerance == 0.05
+    sim = sc.simulate()
+    assert sim.auto.met and sim.settings["dt"] == pytest.approx(sim.auto.settings["dt"])
+    assert sim.settings["method"] == "exact"
+    out = tmp_path / "run"
+    assert main(["simulate", str(p), "--out", str(out), "--quiet"]) == 0
+    for f in ("auto.csv", "auto.json", "auto.png", "events.csv", "forces.csv"):
+        assert (out / f).exists(), f
+
+
+def test_auto_reports_an_unmet_tolerance_by_name(tmp_path):
+    sc = load_scene(SCENE)
+    sc.t_end = 0.05
+    ch = gm.choose_fidelity(sc, 1e-9, levels=3)
+    assert not ch.met and ch.result is None and len(ch.table) == 3
+    assert math.isnan(ch.table.diff_next2.iloc[-1])
+    sc.method, sc.tolerance = "auto", 1e-9
+    with pytest.raises(ModelError, match="scene.tolerance"):
+        sc.simulate()
+
+
+@pytest.mark.parametrize("kwargs, field", [({"tol": 0.0}, "tol"), ({"tol": "5%"}, "tol"),
+                                           ({"coarsest": 0.5}, "coarsest"),
+                                           ({"levels": 2}, "levels")])
+def test_auto_bad_arguments_name_the_field(kwargs, field):
+    with pytest.raises(ModelError, match=f"^{field}"):
+        gm.choose_fidelity(load_scene(SCENE), **kwargs)
+
+
+def test_scene_tolerance_needs_method_auto_and_a_range(tmp_path):
+    base = scene_text()
+    p = tmp_path / "s.toml"
+    p.write_text(base.replace('method = "exact"', 'method = "exact"\ntolerance = 0.05'))
+    with pytest.raises(ModelError, match="scene.tolerance.*auto"):
+        load_scene(p)
+    p.write_text(base.replace('method = "exact"', 'method = "auto"\ntolerance = 0'))
+    with pytest.raises(ModelError, match=r"scene.tolerance.*\(0, 10\)"):
+        load_scene(p)
