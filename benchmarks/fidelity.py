@@ -32,6 +32,10 @@ The carrier-bearing clearance is a per-axis dead band in the reference; the rung
 only) and cannot run the turbine case (its start is a static equilibrium, and an explicit
 solver would need microsecond steps over 30 s); its comparison with the polygon is made on the
 planetary stage alone (``benchmarks/clearance_shape.py``).
+``--auto TOL`` runs ``method = "auto"`` (:func:`gearmodal.choose_fidelity`) on the same case
+instead of the rungs: the step ladder from 4x the reference's refreeze angle and ``dt`` down,
+until a rung agrees within ``TOL`` with the next two finer ones (``DIR/auto.csv``).
+
 Rungs not in the ladder yet (issue "fidelity ladder"): mesh-stiffness alternation. The DOF
 level of the gearbox stages is a rung (``stages_dofs``), listed when the model can be built at
 that level.
@@ -103,6 +107,32 @@ def rungs(quick: bool) -> list[tuple[str, str, str, dict]]:
     return out
 
 
+def run_auto(tol: float, t_end: float, out: Path, clearance: dict) -> None:
+    """``gm.choose_fidelity`` on the clearance case: writes ``DIR/auto.csv``, ``auto.json``,
+    ``auto.png`` (rungs are run in this process, one after the other)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from gearmodal.scene import load_scene
+
+    sc = load_scene(SCENE, {"scene.t_end": t_end, "model.stages.0.carrier_bearing": clearance,
+                            **REFERENCE})
+    t0 = time.perf_counter()
+
+    def show(level, st, row):
+        print(f"rung {level}: " + ", ".join(f"{k} {v:.6g}" for k, v in st.items())
+              + f", {row['cpu_s']:.1f} s CPU, " + ", ".join(f"{q} {row[q]:.6g}"
+                                                          for q in QUANTITIES), flush=True)
+
+    ch = gm.choose_fidelity(sc, tol, progress=show)
+    ch.save(out)
+    ch.plot().savefig(out / "auto.png", dpi=130)
+    pd.set_option("display.width", 220)
+    print(ch.table.to_string())
+    print(f"met {ch.met}, rung {ch.rung}, settings {ch.settings}; wrote {out / 'auto.csv'} "
+          f"({time.perf_counter() - t0:.0f} s)")
+
+
 def plot(df: pd.DataFrame, path: Path) -> None:
     import matplotlib
 
@@ -139,12 +169,17 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="15 s runs, fewer rungs")
     ap.add_argument("--out", required=True, type=Path)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--auto", type=float, metavar="TOL",
+                    help="instead of the rungs: method = 'auto' (gm.choose_fidelity) with this "
+                         "tolerance on the case, from 4x the reference's settings")
     args = ap.parse_args(argv)
     from double_contact import CLEARANCE
 
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     t_end = 15.0 if args.quick else 30.0
+    if args.auto is not None:
+        return run_auto(args.auto, t_end, out, CLEARANCE)
     table = rungs(args.quick)
     cases = [{"scene.t_end": t_end, "model.stages.0.carrier_bearing": CLEARANCE, **REFERENCE,
               **over} for _, _, _, over in table]

@@ -323,6 +323,12 @@ class _Tables:
         self.seg_systems, self.t, self.X, self.S, self.ev = seg_systems, t, X, S, events
         self.system = seg_systems[0][2]
         self.index = pd.Index(t, name="time")
+        self.force_arrays = None
+        if len(seg_systems) > 1:
+            # a refrozen run: its segments' systems (thousands on the turbine) are not kept
+            # alive by the result; the force values are computed now, the table when read
+            self.force_arrays = self._force_arrays()
+            self.seg_systems = None
 
     def __call__(self, name: str) -> pd.DataFrame:
         return getattr(self, name)()
@@ -357,6 +363,10 @@ class _Tables:
             "force_after": ev[:, 5]}, columns=EVENT_COLUMNS)
 
     def forces(self) -> pd.DataFrame:
+        data, labels = self.force_arrays or self._force_arrays()
+        return pd.DataFrame(data, index=self.index, columns=labels)
+
+    def _force_arrays(self) -> tuple[np.ndarray, list[str]]:
         seg_systems, t, X, S = self.seg_systems, self.t, self.X, self.S
         system = self.system
         asm = system.asm
@@ -408,4 +418,4 @@ class _Tables:
             blocks.append(Fr)
             labels += [f"{el}.{ct}" for el, ct in zip(rd.element, rd.contact, strict=True)]
         # a bearing direction is a spring or a dead band, never both: the labels are distinct
-        return pd.DataFrame(np.concatenate(blocks, axis=1), index=self.index, columns=labels)
+        return np.concatenate(blocks, axis=1), labels
