@@ -6,7 +6,8 @@ The rule
 --------
 Rung ``l = 0, 1, ...`` runs the scene with the exact method and its step ``dt`` (and, when the
 scene refreezes a turning geometry, its refreeze angle) multiplied by ``coarsest / 2^l``:
-rung 0 is ``coarsest`` times coarser than the scene, each next rung halves both. Of every rung
+rung 0 is ``coarsest`` times coarser than the scene, each next rung halves both (a turbine
+scene's ``dt`` snapped to the nearest whole fraction of its aerodynamic step). Of every rung
 the quantities engineers use are taken (:data:`QUANTITIES`, from
 :func:`gearmodal.studies.summarize`), and
 
@@ -64,8 +65,8 @@ def difference(a: dict, b: dict, quantities=QUANTITIES) -> float:
         x, y = float(a.get(q, math.nan)), float(b.get(q, math.nan))
         if not (math.isfinite(x) and math.isfinite(y)):
             d = 0.0 if (math.isnan(x) and math.isnan(y)) else math.inf
-        elif y == 0.0:
-            d = 0.0 if x == 0.0 else math.inf
+        elif x == 0.0 or y == 0.0:
+            d = 0.0 if x == y else math.inf
         else:
             d = abs(x - y) / abs(y)
         worst = max(worst, d)
@@ -83,6 +84,17 @@ def _settings(scene) -> dict:
         if rotating_geometry(scene.model):
             out["refreeze_deg"] = float(scene.options.get("refreeze_deg", 2.0))
     return out
+
+
+def _rung_settings(scene, base: dict, f: float) -> dict:
+    """Rung settings at factor ``f`` of the scene's. A turbine scene's ``dt`` must divide its
+    aerodynamic step: it is snapped to the nearest whole fraction of it (``aero_dt / m``)."""
+    st = {k: v * f for k, v in base.items()}
+    if scene.turbine is not None:
+        aero = float(scene.drivetrain.get("aero_dt", 0.02))
+        m = max(1, round(aero / st["dt"]))
+        st["dt"] = aero / m
+    return st
 
 
 def _rung_scene(scene, settings: dict):
@@ -114,6 +126,7 @@ class FidelityChoice:
         ``n_events``, the quantities, ``diff_next`` = d(l, l + 1) and ``diff_next2`` =
         d(l, l + 2) of (A1) (NaN where that rung was not run), ``chosen``.
     tol : the tolerance asked for.
+    results : every rung's result, in rung order (only with ``keep_all=True``).
     """
 
     met: bool
@@ -166,7 +179,7 @@ class FidelityChoice:
 
 
 def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: int = 6,
-           quantities=QUANTITIES, progress=None) -> FidelityChoice:
+           quantities=QUANTITIES, progress=None, keep_all: bool = False) -> FidelityChoice:
     """Run the step ladder of ``scene`` from ``coarsest`` times its settings and choose the
     cheapest rung converged to ``tol`` by rule (A2) of :mod:`gearmodal.auto`.
 
@@ -179,6 +192,8 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     levels : at most this many rungs are run (3 to 12); each halves the previous one's.
     quantities : keys of :func:`gearmodal.studies.summarize` compared.
     progress : ``progress(rung, settings, row)`` after each rung (CLI, studies).
+    keep_all : keep every rung's result in ``choice.results`` (memory: a turbine run each);
+        by default only the chosen one is kept.
     """
     from .studies import summarize
 
@@ -193,13 +208,15 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     chosen = None
     for level in range(levels):
         f = coarsest / 2.0**level
-        st = {k: v * f for k, v in base.items()}
+        st = _rung_settings(scene, base, f)
         t0 = time.process_time()
         res = _rung_scene(scene, st).simulate()
         cpu = time.process_time() - t0
         summ = summarize(res)
         results.append(res)
         summaries.append(summ)
+        if not keep_all and level >= 3:
+            results[level - 3] = None  # only the last three rungs can still be chosen
         rows.append({"rung": level, **st, "cpu_s": cpu, "n_events": summ.get("n_events"),
                      **{q: summ.get(q, math.nan) for q in quantities}})
         if progress is not None:
@@ -220,10 +237,10 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     table = pd.DataFrame(rows)
     settings = {k: v for k, v in rows[chosen].items() if k in base} if chosen is not None \
         else {}
+    result = results[chosen] if chosen is not None else None
     return FidelityChoice(met=chosen is not None, rung=chosen, settings=settings,
-                          result=results[chosen] if chosen is not None else None,
-                          table=table, tol=float(tol), quantities=tuple(quantities),
-                          results=results)
+                          result=result, table=table, tol=float(tol),
+                          quantities=tuple(quantities), results=results if keep_all else [])
 
 
 def chosen_result(choice: FidelityChoice, field_: str = "tol"):

@@ -96,11 +96,13 @@ class Scene:
 
         ``method = "auto"`` runs the step ladder of :func:`gearmodal.auto.choose` with the
         scene's ``tolerance`` and returns the chosen rung's result, the choice attached as
-        ``result.auto`` (``progress(rung, settings, row)`` after each rung)."""
+        ``result.auto`` (``progress(i, n)`` after rung ``i`` of at most ``n``)."""
         if self.method == "auto":
             from .auto import choose, chosen_result
 
-            return chosen_result(choose(self, self.tolerance, progress=progress),
+            levels = 6
+            step = None if progress is None else (lambda lv, st, row: progress(lv + 1, levels))
+            return chosen_result(choose(self, self.tolerance, levels=levels, progress=step),
                                  "scene.tolerance")
         if self.turbine is not None:
             from .turbine import simulate_drivetrain

@@ -36,8 +36,8 @@ def test_auto_choice_meets_its_tolerance_against_a_much_finer_run(case):
     chosen the first rung satisfying (A2)."""
     tol = 0.05
     sc = load_scene(SCENE, CASES[case])
-    ch = gm.choose_fidelity(sc, tol)
-    assert ch.met and ch.rung is not None
+    ch = gm.choose_fidelity(sc, tol, keep_all=True)
+    assert ch.met and ch.rung is not None and ch.result is ch.results[ch.rung]
     t = ch.table
     assert t.chosen.sum() == 1 and bool(t.chosen.iloc[ch.rung])
     assert t.diff_next.iloc[ch.rung] <= tol and t.diff_next2.iloc[ch.rung] <= tol
@@ -59,7 +59,10 @@ def test_scene_method_auto_returns_the_chosen_rung_and_the_cli_writes_the_table(
     p.write_text(text)
     sc = load_scene(p)
     assert sc.method == "auto" and sc.tolerance == 0.05
-    sim = sc.simulate()
+    calls = []
+    sim = sc.simulate(progress=lambda i, n: calls.append((i, n)))
+    assert calls[0] == (1, 6) and len(calls) == len(sim.auto.table)
+    assert sim.auto.results == []  # only the chosen rung's run is kept
     assert sim.auto.met and sim.settings["dt"] == pytest.approx(sim.auto.settings["dt"])
     assert sim.settings["method"] == "exact"
     out = tmp_path / "run"
@@ -96,3 +99,27 @@ def test_scene_tolerance_needs_method_auto_and_a_range(tmp_path):
     p.write_text(base.replace('method = "exact"', 'method = "auto"\ntolerance = 0'))
     with pytest.raises(ModelError, match=r"scene.tolerance.*\(0, 10\)"):
         load_scene(p)
+
+
+def test_turbine_rungs_keep_dt_a_whole_fraction_of_the_aerodynamic_step():
+    """A turbine scene's dt must divide aero_dt (0.02 s): the ladder snaps each rung's step."""
+    from gearmodal.auto import _rung_settings, _settings
+
+    sc = load_scene("studies/scenes/600kw_turbine_10ms.toml", {"scene.dt": 2e-3})
+    base = _settings(sc)
+    assert base == {"dt": 2e-3, "refreeze_deg": 0.125}
+    for f in (4.0, 2.0, 1.0, 0.5, 0.25, 3.0):
+        st = _rung_settings(sc, base, f)
+        m = 0.02 / st["dt"]
+        assert abs(m - round(m)) < 1e-9 and st["refreeze_deg"] == 0.125 * f
+        assert st["dt"] / (2e-3 * f) == pytest.approx(1.0, rel=0.34)
+
+
+def test_difference_is_symmetric_about_zero():
+    a, b = dict.fromkeys(QUANTITIES, 1.0), dict.fromkeys(QUANTITIES, 1.0)
+    assert difference(a, b) == 0.0
+    a["double_contact_time_s"] = 0.0
+    assert difference(a, b) == math.inf and difference(b, a) == math.inf
+    b["double_contact_time_s"] = 0.0
+    b["max_front_force_N"] = 1.1
+    assert difference(a, b) == pytest.approx(0.1 / 1.1)

@@ -29,12 +29,20 @@ def _table(name: str, doc: str) -> property:
     attr = "_" + name
 
     def get(self):
-        val = self.__dict__.get(attr)
-        if val is None and self.__dict__.get("tables") is not None:
-            val = self.__dict__[attr] = self.tables(name)
+        d = self.__dict__
+        val = d.get(attr)
+        if val is None and d.get("tables") is not None:
+            val = d[attr] = d["tables"](name)
+            if all(d.get("_" + t) is not None for t in SimulationResult.TABLES):
+                d["tables"] = None  # all built: the run's arrays are not kept twice
         return val
 
-    def set_(self, val):  # None: built (again) from the run's arrays when next read
+    def set_(self, val):
+        if val is None and attr in self.__dict__:
+            # the builder knows only the raw run: the corrections simulate applies after it
+            # (coupled coordinates, exact-geometry springs, the drivetrain's rigid rotation)
+            # would be lost by a rebuild
+            raise ValueError(f"SimulationResult.{name} cannot be reset to None")
         self.__dict__[attr] = val
 
     return property(get, set_, doc=doc)
@@ -72,7 +80,7 @@ class SimulationResult:
     The five tables (``q``, ``v``, ``forces``, ``events``, ``contact_state``) are built from
     the run's arrays when first read and then kept, so a study that reads only the event log
     does not pay for the force table (~0.1-0.5 ms each for a short run; pandas). Assigning a
-    table replaces it (``None``: rebuilt when next read). Pickling and
+    table replaces it. Once all five are built the run's arrays are released. Pickling and
     ``dataclasses.replace`` build them all.
     """
 
@@ -101,6 +109,12 @@ class SimulationResult:
         for name in self.TABLES:  # build what is still lazy: the builder holds the systems
             getattr(self, name)
         return {**self.__dict__, "tables": None}
+
+    def __setstate__(self, state):
+        for name in self.TABLES:  # results pickled before the tables were lazy
+            if name in state:
+                state["_" + name] = state.pop(name)
+        self.__dict__.update(state)
 
     def __repr__(self) -> str:
         return (f"SimulationResult({len(self.t)} times to {self.t[-1]:.6g} s, "

@@ -604,8 +604,10 @@ class TaylorIntegrator:
             system.rho_bound = self.rho
         self.n_terms = int(n_terms) if n_terms else terms_for(reach)
         # terms by the piece's reach rho h, in 64ths of ``reach`` rounded up (at least 6: the
-        # forcing enters at the 4th term; the tail check guards every piece anyway)
+        # forcing enters at the 4th term; the tail check guards every piece anyway). An
+        # explicit ``n_terms`` is used for every piece.
         self.terms = np.array([min(max(terms_for(reach * j / TERM_BINS), 6), self.n_terms)
+                               if not n_terms else self.n_terms
                                for j in range(TERM_BINS)] + [self.n_terms], dtype=np.int64)
         self.tscale = TERM_BINS * self.rho / reach
         self.h_max = min(reach / self.rho, self.dt)
