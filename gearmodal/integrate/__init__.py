@@ -309,8 +309,7 @@ def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResu
     (:class:`_Tables`). ``events``: (n, 6) rows or a list of tuples (:func:`event_array`)."""
     system = seg_systems[0][2]
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
-    tables = _Tables(seg_systems, t, X, S, event_array([events]) if len(events) else
-                     np.empty((0, 6)))
+    tables = _Tables(seg_systems, t, X, S, event_array([events]))
     return SimulationResult(t=t, settings=settings, initial_state=init, stats=stats,
                             tables=tables)
 
