@@ -55,6 +55,8 @@ QUANTITIES = ("max_front_force_N", "max_planet_bearing_force_N", "double_contact
               "peak_load_sharing_factor")
 #: default tolerance of ``method = "auto"`` (relative, on every quantity)
 DEFAULT_TOL = 0.05
+#: default largest number of rungs run
+LEVELS = 6
 
 
 def difference(a: dict, b: dict, quantities=QUANTITIES) -> float:
@@ -178,7 +180,7 @@ class FidelityChoice:
         return fig
 
 
-def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: int = 6,
+def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: int = LEVELS,
            quantities=QUANTITIES, progress=None, keep_all: bool = False) -> FidelityChoice:
     """Run the step ladder of ``scene`` from ``coarsest`` times its settings and choose the
     cheapest rung converged to ``tol`` by rule (A2) of :mod:`gearmodal.auto`.

@@ -98,11 +98,10 @@ class Scene:
         scene's ``tolerance`` and returns the chosen rung's result, the choice attached as
         ``result.auto`` (``progress(i, n)`` after rung ``i`` of at most ``n``)."""
         if self.method == "auto":
-            from .auto import choose, chosen_result
+            from .auto import LEVELS, choose, chosen_result
 
-            levels = 6
-            step = None if progress is None else (lambda lv, st, row: progress(lv + 1, levels))
-            return chosen_result(choose(self, self.tolerance, levels=levels, progress=step),
+            step = None if progress is None else (lambda lv, st, row: progress(lv + 1, LEVELS))
+            return chosen_result(choose(self, self.tolerance, progress=step),
                                  "scene.tolerance")
         if self.turbine is not None:
             from .turbine import simulate_drivetrain

@@ -79,7 +79,8 @@ class SimulationResult:
 
     The five tables (``q``, ``v``, ``forces``, ``events``, ``contact_state``) are built from
     the run's arrays when first read and then kept, so a study that reads only the event log
-    does not pay for the force table (~0.1-0.5 ms each for a short run; pandas). Assigning a
+    does not pay for the force table (all five: ~1 ms of pandas on the 4 ms stage transient,
+    ``benchmarks/work_precision.py``'s paired re-timing). Assigning a
     table replaces it. Once all five are built the run's arrays are released. Pickling and
     ``dataclasses.replace`` build them all.
     """
