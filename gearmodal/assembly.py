@@ -37,6 +37,7 @@ from .kernels.wheel import (
 )
 from .model.clearance import polygon_ramps
 from .model.components import DIRECTIONS, Gear
+from .model.mesh_stiffness import MeshVariation, variation_of
 from .model.model import GROUND, Model
 
 
@@ -51,6 +52,10 @@ class Contacts:
 
     ``angle`` is the normal of a polygonal clearance's facet in its bearing's axes (rad; NaN
     for other contacts), see :mod:`gearmodal.model.clearance`.
+
+    ``variation`` lists the mesh flanks whose stiffness alternates at the mesh frequency
+    (``Mesh.alternation``, :mod:`gearmodal.model.mesh_stiffness`); their ``stiffness`` here is
+    the mean, which the modal and static analyses use.
     """
 
     element: list[str] = field(default_factory=list)
@@ -62,6 +67,7 @@ class Contacts:
     damping: np.ndarray = None
     nominal: np.ndarray = None
     angle: np.ndarray = None
+    variation: MeshVariation | None = None
 
     def __post_init__(self):
         if self.angle is None:
@@ -302,6 +308,7 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
         kinds.append(kind)
 
     # Meshes: two flanks on mirrored lines of action (DESIGN 2.2).
+    var_rows = []  # alternating mesh stiffness (Mesh.alternation): (row, rate, phase, ...)
     for m in model.meshes.values():
         a, b = model.bodies[m.gear_a], model.bodies[m.gear_b]
         if m.internal is not None:
@@ -331,6 +338,8 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
             w[slices[a.name]] += J[:6] @ T[a.name]
             w[slices[b.name]] += J[6:] @ T[b.name]
             if np.any(w):
+                if m.alternation:
+                    var_rows.append((len(rows), *variation_of(model, m, a, b, bool(internal))))
                 add_contact(w, off, m.stiffness, m.damping, flank == "front", m.name, flank,
                             "mesh")
 
@@ -435,6 +444,10 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
         offset=np.array(offs, dtype=float), stiffness=np.array(ks, dtype=float),
         damping=np.array(cs, dtype=float), nominal=np.array(noms, dtype=bool),
         angle=np.array(angles, dtype=float))
+    if var_rows:
+        cols = list(zip(*var_rows, strict=True))
+        contacts.variation = MeshVariation(np.array(cols[0], dtype=np.int64),
+                                           *(np.array(c, dtype=float) for c in cols[1:]))
     nl = len(lin_rows)
     springs = Contacts(
         element=lin_elem, contact=lin_dir, kind=["spring"] * nl,

@@ -376,7 +376,8 @@ class CoupledAssembly(Assembly):
                 return Contacts(element=list(c.element), contact=list(c.contact),
                                 kind=list(c.kind), W=c.W @ N, offset=c.offset.copy(),
                                 stiffness=c.stiffness.copy(), damping=c.damping.copy(),
-                                nominal=c.nominal.copy(), angle=c.angle.copy())
+                                nominal=c.nominal.copy(), angle=c.angle.copy(),
+                                variation=c.variation)
 
             self._reduced = Assembly(
                 dof_names=[self.dof_names[i] for i in self.independent],
@@ -606,7 +607,7 @@ class Coupled:
             return Contacts(element=list(c.element), contact=list(c.contact),
                             kind=list(c.kind), W=grow(W, W.shape[0], n), offset=c.offset,
                             stiffness=c.stiffness, damping=c.damping, nominal=c.nominal,
-                            angle=c.angle)
+                            angle=c.angle, variation=c.variation)
 
         for c in self.constraints:
             if isinstance(c, Joint):

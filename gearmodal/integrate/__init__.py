@@ -153,6 +153,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     else:
         raise TypeError(f"expected a gm.Model or gm.Coupled, got {type(model).__name__}")
     t = np.arange(n_steps + 1) * dt
+    omega = float(speed_rpm) * 2 * math.pi / 60  # the input azimuth is omega t
     runner: Callable = METHODS[method]
     x = None
     s = None
@@ -198,7 +199,8 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
             # first-order geometry correction on the static deflection (QuasiStatic)
             g = -(geometry.stiffness_rate(azimuth) @ statics.static(system, s, F[0]))
             F = F + np.outer(om * ts - azimuth, g)
-        X, S, ev, st = runner(system, dt, k1 - k0, F, x, s, **options)
+        X, S, ev, st = runner(system, dt, k1 - k0, F, x, s, azimuth0=omega * k0 * dt,
+                              **options)
         system.__dict__.pop("_exact_integrators", None)  # the segment is closed
         off = k0 * dt
         events.append(_shift(ev, off))
@@ -214,6 +216,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     stats = {**stats_all, "cpu_s": time.process_time() - cpu, "n_events": len(events),
              "n_steps": n_steps, "n_freezes": len(segments)}
     result = _result([sg[:3] for sg in seg_systems], t, X, S, events, s_init, stats,
+                     mesh_stiffness(system0, omega * t),
                    {"model": name, "method": method, "t_end": t_end, "dt": dt,
                     "speed_rpm": speed_rpm, "refreeze_deg": refreeze_deg, "options": options,
                     "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
@@ -304,12 +307,21 @@ def _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm) -> None:
             np.abs(result.constraint_residual.to_numpy()).max(initial=0.0))
 
 
-def _result(seg_systems, t, X, S, events, s0, stats, settings) -> SimulationResult:
+def mesh_stiffness(system: PiecewiseLinearSystem, azimuth: np.ndarray):
+    """``(rows, k)``: the alternating mesh flanks' stiffness at the output times' input
+    azimuths (len(t), rows), or None without alternation (the result's forces use it)."""
+    if not system.alternating:
+        return None
+    return system.variation.rows, system.variation.stiffness(azimuth)
+
+
+def _result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings) -> SimulationResult:
     """The :class:`SimulationResult` of a run: its tables are built on first read
-    (:class:`_Tables`). ``events``: (n, 6) rows or a list of tuples (:func:`event_array`)."""
+    (:class:`_Tables`). ``events``: (n, 6) rows or a list of tuples (:func:`event_array`).
+    ``mesh_k``: :func:`mesh_stiffness` of the run."""
     system = seg_systems[0][2]
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
-    tables = _Tables(seg_systems, t, X, S, event_array([events]))
+    tables = _Tables(seg_systems, t, X, S, event_array([events]), mesh_k)
     return SimulationResult(t=t, settings=settings, initial_state=init, stats=stats,
                             tables=tables)
 
@@ -318,8 +330,9 @@ class _Tables:
     """Builds a run's tables from its arrays (:class:`SimulationResult` asks for each when it is
     first read): ``q``, ``v``, ``forces``, ``events``, ``contact_state``."""
 
-    def __init__(self, seg_systems, t, X, S, events: np.ndarray):
+    def __init__(self, seg_systems, t, X, S, events: np.ndarray, mesh_k=None):
         self.seg_systems, self.t, self.X, self.S, self.ev = seg_systems, t, X, S, events
+        self.mesh_k = mesh_k
         self.system = seg_systems[0][2]
         self.index = pd.Index(t, name="time")
         self.force_arrays = None
@@ -376,7 +389,11 @@ class _Tables:
         for k0, k1, sy in seg_systems:  # each segment with the geometry it was frozen at
             P[k0:k1 + 1] = X[k0:k1 + 1, :n] @ sy.W.T - sy.offset
             R[k0:k1 + 1] = X[k0:k1 + 1, n:] @ sy.W.T
-        Fc = np.where(S, system.k * P + system.c * R, 0.0)
+        K = system.k
+        if self.mesh_k is not None:  # alternating mesh flanks: their stiffness at each time
+            K = np.repeat(system.k[None, :], len(t), axis=0)
+            K[:, self.mesh_k[0]] = self.mesh_k[1]
+        Fc = np.where(S, K * P + system.c * R, 0.0)
         # one column per mesh flank, one per bearing direction (its two dead-band sides
         # combined; a polygon's facet forces resolved on the bearing's x and y axes)
         names: dict[str, int] = {}

@@ -126,7 +126,7 @@ def _check_finite(X: np.ndarray, dt: float) -> None:
 
 def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
               x0: np.ndarray, s0: np.ndarray, max_events_per_step: int = 200,
-              propagator: str = "taylor"):
+              propagator: str = "taylor", azimuth0: float = 0.0):
     """Integrate ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
 
     ``F_grid`` (n_steps + 1, n) is the generalised force at the output times (linear in
@@ -142,11 +142,19 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     ~170 us per new state, then one product per output step). Both are exact to rounding;
     ``"expm"`` pays off only when few contact states recur over many steps with ``dt`` much
     longer than the fastest period.
+
+    ``azimuth0``: input azimuth at the start, rad; with alternating mesh stiffness
+    (``Mesh.alternation``) the Taylor propagator switches each flank's stiffness at its
+    scheduled times exactly (time events); ``"expm"`` does not support it.
     """
     system.asm.require_piecewise_linear("method='exact'")
     if propagator not in PROPAGATORS:
         raise ModelError("propagator", f"= {propagator!r}: must be one of "
                          + ", ".join(map(repr, PROPAGATORS)))
+    if propagator == "expm" and system.alternating:
+        raise ModelError("propagator", "= 'expm' caches propagators per contact state and "
+                         "cannot follow an alternating mesh stiffness (Mesh.alternation); use "
+                         "propagator='taylor'")
     # the propagators belong to the frozen system: callers that advance one system in several
     # calls (the turbine co-simulation) keep them
     key = (propagator, float(dt), int(max_events_per_step))
@@ -157,7 +165,7 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         integ = cache[key] = kind(system, dt, max_events_per_step)
     F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))  # input basis, if any
     if propagator == "taylor":
-        X, S, events = integ.run(n_steps, F_grid, x0, s0)
+        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0)
         _check_finite(X, dt)
         return X, S, events, {"exponentials": 0, **integ.counts}
     prop = integ.prop

@@ -21,6 +21,9 @@ BETA, GAMMA = 0.25, 0.5
 def run_newmark(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
                 x0: np.ndarray, s0: np.ndarray, **_):
     system.asm.require_piecewise_linear("method='newmark'")
+    if system.alternating:
+        raise ModelError("method", "= 'newmark' does not follow an alternating mesh stiffness "
+                         "(Mesh.alternation); use method='exact' or 'scipy'")
     n = system.n
     M = system.asm.M
     h = dt

@@ -10,6 +10,9 @@ It is also the one method that integrates the exactly round bearing clearance
 (``clearance_shape="round"``, (R1) of :mod:`gearmodal.model.clearance`): a nonlinear force
 ``k (|d| - c) + c_d |d|'`` along ``d / |d|`` while in contact, with ``|d| - c`` as one more
 event function; its events are logged with contact ``radial``.
+
+An alternating mesh stiffness (``Mesh.alternation``) is followed by ending the solver's span
+at every scheduled change and restarting with the new stiffness (exact switching times).
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ from .system import PiecewiseLinearSystem
 
 def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
               x0: np.ndarray, s0: np.ndarray, scipy_method: str = "RK45", rtol: float = 1e-6,
-              atol: float = 1e-12, max_events: int = 10_000_000, **options):
+              atol: float = 1e-12, max_events: int = 10_000_000, azimuth0: float = 0.0,
+              **options):
     n = system.n
     t_grid = np.arange(n_steps + 1) * dt
     X = np.empty((n_steps + 1, 2 * n))
@@ -37,8 +41,15 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     nc = system.n_contacts
     rd = _Round(system)
     sr = rd.radius(x) > rd.c  # round clearances in contact (indices nc + b in events)
+    # alternating mesh stiffness: the solver restarts at every scheduled change
+    ks = np.array(system.stiffness_at(azimuth0), dtype=float)
+    sched_t, sched_e, sched_k = system.schedule(azimuth0, n_steps * dt)
+    ip = 0
     while filled <= n_steps:
-        A, f = system.first_order(s)
+        while ip < len(sched_t) and sched_t[ip] <= t + 1e-13 * dt:
+            ks[sched_e[ip]] = sched_k[ip]
+            ip += 1
+        A, f = system.first_order(s, ks)
 
         sr_now = sr.copy()  # the round clearances' state over this restart span
 
@@ -72,11 +83,17 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         # a contact switched while tangent (gap and rate ~ 0) would fire again at the restart
         # point and flip forever: its event is muted over a span of 1e-6 dt after the restart
         t_stop = min(t + 1e-6 * dt, t_grid[-1]) if muted else t_grid[-1]
+        if ip < len(sched_t):
+            t_stop = min(t_stop, sched_t[ip])
         t_eval = t_grid[filled:]
         t_eval = t_eval[t_eval <= t_stop]
+        # a span ending at a scheduled change also returns the state there
+        extra = not muted and t_stop < t_grid[-1] and not (len(t_eval) and t_eval[-1] == t_stop)
         try:
             sol = solve_ivp(rhs, (t, t_stop), x, method=scipy_method,
-                            t_eval=None if muted else t_eval, dense_output=bool(muted),
+                            t_eval=None if muted else (np.append(t_eval, t_stop) if extra
+                                                        else t_eval),
+                            dense_output=bool(muted),
                             events=evs or None, rtol=rtol, atol=atol, **options)
         except ValueError as err:  # scipy's own event root-finding can fail on flat events
             raise ModelError("simulate", f"scipy ({scipy_method}) event location failed at "
@@ -94,8 +111,10 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
                 X[filled:filled + m] = sol.sol(inside).T
         else:
             m = len(sol.t)
+            if extra and m and sol.t[-1] == t_stop:
+                m -= 1  # the change's time, not an output time
             if m:
-                X[filled:filled + m] = np.asarray(sol.y).T
+                X[filled:filled + m] = np.asarray(sol.y)[:, :m].T
         if m:
             S[filled:filled + m] = s
             filled += m
@@ -111,11 +130,14 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
                     if (p[e] > 0) != s[e]:
                         s = s.copy()
                         s[e] = not s[e]
-                        force = system.k[e] * max(p[e], 0.0) + system.c[e] * r[e] if s[e] \
+                        force = ks[e] * max(p[e], 0.0) + system.c[e] * r[e] if s[e] \
                             else 0.0
                         events.append((float(t), int(e), not s[e], bool(s[e]), float(r[e]),
                                        float(force)))
                 muted = set()
+                continue
+            if t_stop < t_grid[-1]:  # at a scheduled stiffness change
+                x, t = np.asarray(sol.y)[:, -1].copy(), float(t_stop)
                 continue
             break
         # the earliest event(s)

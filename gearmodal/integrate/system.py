@@ -65,6 +65,15 @@ class PiecewiseLinearSystem:
         self.k = c.stiffness.copy()
         self.c = c.damping.copy()
         self.names = [f"{e}:{f}" for e, f in zip(c.element, c.contact, strict=True)]
+        # alternating mesh stiffness (Mesh.alternation): ``k`` holds the means; a run takes
+        # the values at its start azimuth and the schedule of changes (stiffness_at, schedule)
+        self.variation = c.variation
+        self.omega = om
+        self.k_max = self.k
+        if self.variation is not None and len(self.variation):
+            vr = self.variation
+            self.k_max = self.k.copy()
+            self.k_max[vr.rows] = np.maximum(vr.k_single, vr.k_double)
         # Optional input basis P (n x m, orthonormal): every generalised force of a run lies in
         # span(P), so the exact propagators need only the m columns Minv P instead of Minv
         # (Van Loan's augmented matrix 2n + 2m instead of 4n). The contacts' constant forces
@@ -110,18 +119,41 @@ class PiecewiseLinearSystem:
     def n_contacts(self) -> int:
         return len(self.offset)
 
-    def matrices(self, s: np.ndarray):
-        """``(K_s, C_s, f_s)`` of contact state ``s`` (booleans)."""
+    @property
+    def alternating(self) -> bool:
+        """True if some mesh stiffness alternates (a time-dependent contact stiffness)."""
+        return self.variation is not None and len(self.variation) > 0
+
+    def stiffness_at(self, azimuth: float) -> np.ndarray:
+        """Contact stiffnesses at input azimuth ``azimuth`` (rad): the means, with the
+        alternating mesh flanks at their value there (mesh_stiffness M1)."""
+        if not self.alternating:
+            return self.k
+        k = self.k.copy()
+        k[self.variation.rows] = self.variation.stiffness(azimuth)[0]
+        return k
+
+    def schedule(self, azimuth0: float, duration: float):
+        """Stiffness changes ``(times, rows, k)`` over ``(0, duration]`` s of a run starting at
+        input azimuth ``azimuth0`` (rad) and turning at the frozen speed."""
+        if not self.alternating:
+            return np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(0)
+        return self.variation.schedule(azimuth0, self.omega, duration)
+
+    def matrices(self, s: np.ndarray, k: np.ndarray | None = None):
+        """``(K_s, C_s, f_s)`` of contact state ``s`` (booleans), with contact stiffnesses
+        ``k`` (default: the system's)."""
+        k = self.k if k is None else k
         W = self.W[s]
-        K = self.K0 + (W.T * self.k[s]) @ W
+        K = self.K0 + (W.T * k[s]) @ W
         C = self.C0 + (W.T * self.c[s]) @ W
-        f = W.T @ (self.k[s] * self.offset[s])
+        f = W.T @ (k[s] * self.offset[s])
         return K, C, f
 
-    def first_order(self, s: np.ndarray):
+    def first_order(self, s: np.ndarray, k: np.ndarray | None = None):
         """``(A_s, f_s)``: the state matrix and the constant contact force of state ``s``."""
         n = self.n
-        K, C, f = self.matrices(s)
+        K, C, f = self.matrices(s, k)
         A = np.zeros((2 * n, 2 * n))
         A[:n, n:] = np.eye(n)
         A[n:, :n] = -self.Minv @ K

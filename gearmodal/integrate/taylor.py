@@ -348,7 +348,7 @@ def first_root(coef, work, stk):
 def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0, n_steps,
                dt, h_max,
                terms, tscale, margin, simultaneous, max_events, X, S, EV, n_ev,
-               counts):
+               counts, sched_t, sched_e, sched_k, sched_pos):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -359,6 +359,12 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     ``x``, ``s`` as left); 2 = more than ``max_events`` changes inside step ``k``, the last at
     ``contact``. ``counts`` (int64, 3) accumulates the pieces summed, the pieces halved (a
     state stiffer than ``h_max`` allows) and the gap polynomials searched for a root.
+
+    ``sched_t``, ``sched_e``, ``sched_k``: scheduled stiffness changes (time from step 0,
+    contact, new stiffness; sorted by time), from entry ``sched_pos[0]`` on (advanced in place,
+    as ``kc``): alternating mesh stiffness (:mod:`gearmodal.model.mesh_stiffness`). A piece
+    ends at the next scheduled time and the change is applied there exactly, to a closed
+    contact as a rank-one update (a time event: no state change, no log entry).
     """
     N = x.shape[0]
     n = N // 2
@@ -391,10 +397,13 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     dense = False
     cap = EV.shape[0]
     k = k0
+    ip = sched_pos[0]
+    n_sched = sched_t.shape[0]
     while k < n_steps:
         if n_ev + max_events + nc + 1 > cap:
             x[:n] = q
             x[n:] = v
+            sched_pos[0] = ip
             return 1, k, n_ev, -1
         tk = k * dt
         t_end = tk + dt
@@ -411,6 +420,17 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
         count = 0
         fresh = False  # ga, ra hold the gaps at (t, q, v) in state s
         while True:
+            # scheduled stiffness changes due by now (time events)
+            while ip < n_sched and sched_t[ip] <= t + 1e-13 * dt:
+                e = sched_e[ip]
+                if s[e]:
+                    _toggle(U, W, kc, cc, off, e, -1.0, MKC, acc)
+                    kc[e] = sched_k[ip]
+                    _toggle(U, W, kc, cc, off, e, 1.0, MKC, acc)
+                    toggled += 2
+                else:
+                    kc[e] = sched_k[ip]
+                ip += 1
             remaining = t_end - t
             if remaining <= 1e-13 * dt:
                 break
@@ -420,6 +440,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             h = min(hm, remaining)
             if h < remaining and remaining - h < 1e-3 * hm:
                 h = 0.5 * remaining  # no sliver before the output time
+            if ip < n_sched and sched_t[ip] < t + h:
+                h = sched_t[ip] - t  # the piece ends at the next time event
             # as many terms as the piece's own reach rho h needs (a short piece before an
             # output time or after an event needs fewer)
             j = int(math.ceil(h * tscale))
@@ -484,6 +506,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     best = min(best, roots[e])
             if best == np.inf:
                 t = t_end if h == remaining else t + h
+                if ip < n_sched and sched_t[ip] - t < 1e-13 * dt:
+                    t = max(t, sched_t[ip])  # exactly at the time event
                 for i in range(n):
                     q[i] = qb[i]
                     v[i] = vb[i]
@@ -523,10 +547,14 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             if count > max_events:
                 x[:n] = q
                 x[n:] = v
+                sched_pos[0] = ip
                 return 2, k, n_ev, last
             if toggled >= REFRESH:  # rounding of the updates, rebuilt from scratch
                 _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
                 toggled = 0
+        if toggled >= REFRESH:
+            _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+            toggled = 0
         k += 1
         for i in range(n):
             X[k, i] = q[i]
@@ -535,6 +563,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             S[k, e] = s[e]
     x[:n] = q
     x[n:] = v
+    sched_pos[0] = ip
     return 0, k, n_ev, -1
 
 
@@ -568,7 +597,7 @@ def spectral_bound_all(system) -> float:
             return float(max(abs(e_lo[0]), abs(e_lo[-1]), abs(e_hi[0]), abs(e_hi[-1])))
         return float(np.linalg.norm(A0, 2) + np.sum(np.abs(per_contact) * w2))
 
-    k = norm_bound(system.K0, system.k)
+    k = norm_bound(system.K0, getattr(system, "k_max", system.k))  # alternating meshes: max
     c = norm_bound(system.C0, system.c)
     return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
 
@@ -613,9 +642,14 @@ class TaylorIntegrator:
         self.h_max = min(reach / self.rho, self.dt)
         self.MinvU = np.ascontiguousarray(system.MinvU)
 
-    def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray):
-        """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`)."""
+    def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray,
+            azimuth0: float = 0.0):
+        """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`); the input
+        azimuth at the start is ``azimuth0`` (rad; alternating mesh stiffness only)."""
         sysm = self.sys
+        kc = np.array(sysm.stiffness_at(azimuth0), dtype=float)  # changed in place by events
+        sched = sysm.schedule(azimuth0, n_steps * self.dt)
+        sched_pos = np.zeros(1, dtype=np.int64)
         X = np.empty((n_steps + 1, 2 * sysm.n))
         S = np.empty((n_steps + 1, sysm.n_contacts), dtype=bool)
         X[0], S[0] = x0, s0
@@ -626,10 +660,11 @@ class TaylorIntegrator:
         counts = np.zeros(3, dtype=np.int64)
         while True:
             status, k, n_ev, contact = taylor_run(
-                self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, sysm.k,
+                self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
                 sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
                 self.terms, self.tscale, GRAZE_MARGIN,
-                SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts)
+                SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts, *sched,
+                sched_pos)
             if status == 0:
                 break
             if status == 1:

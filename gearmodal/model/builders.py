@@ -42,6 +42,36 @@ def _same_tooth_system(field: str, a: Gear, b: Gear) -> None:
                                 f"{b.helix_angle:g} rad)")
 
 
+def _alternation(field: str, spec, key: str | None = None, phase: float = 0.0) -> dict:
+    """:class:`Mesh` keywords of a builder's ``mesh_alternation`` (None/False, True or a table
+    of ``contact_ratio`` (per mesh kind ``key`` if a table), ``stiffness_ratio``, ``phase``);
+    ``phase`` is added to the table's."""
+    if spec is None or spec is False:
+        return {}
+    if spec is True:
+        spec = {}
+    if not isinstance(spec, dict):
+        raise ModelError(field, f"= {spec!r}: expected true/false or a table of contact_ratio, "
+                         "stiffness_ratio, phase")
+    bad = set(spec) - {"contact_ratio", "stiffness_ratio", "phase"}
+    if bad:
+        raise ModelError(f"{field}.{sorted(bad)[0]}", "unknown key; allowed: contact_ratio, "
+                         "stiffness_ratio, phase")
+    out = {"alternation": True, "phase": v.number(f"{field}.phase", spec.get("phase", 0.0))
+           + phase}
+    eps = spec.get("contact_ratio")
+    if isinstance(eps, dict):
+        if key is None or key not in eps:
+            raise ModelError(f"{field}.contact_ratio", f"= {eps!r}: expected a number"
+                             + (f" or a table with {key!r}" if key else ""))
+        eps = eps[key]
+    if eps is not None:
+        out["contact_ratio"] = eps
+    if "stiffness_ratio" in spec:
+        out["stiffness_ratio"] = spec["stiffness_ratio"]
+    return out
+
+
 def _support(field: str, spec, dofs: str) -> dict:
     """Normalise a bearing spec: a number (translational stiffness, N/m) or a table with
     ``stiffness``, ``damping``, ``clearance`` tables keyed by direction and optionally
@@ -70,7 +100,7 @@ def _support(field: str, spec, dofs: str) -> dict:
 
 def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
               mesh_damping: float = 0.0, dofs: str = "torsional",
-              bearing_stiffness=None) -> Model:
+              bearing_stiffness=None, mesh_alternation=None) -> Model:
     """Two external gears on fixed bearings, free to rotate.
 
     Parameters
@@ -80,6 +110,9 @@ def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
     mesh_damping : N s/m.
     dofs : DOF level of both wheels. At ``planar``/``full`` the wheels float on bearings of
         ``bearing_stiffness`` (N/m, or a table as for :class:`Bearing`) to the ground.
+    mesh_alternation : None/False (constant mesh stiffness), True or a table of
+        ``contact_ratio``, ``stiffness_ratio``, ``phase``: the stiffness alternates between
+        single and double tooth-pair contact at the mesh frequency (:class:`Mesh`).
 
     DOFs are ``"pinion.theta"``, ``"wheel.theta"`` (plus ``.x``, ``.y``...); loads
     ``"pinion.torque"``, ``"wheel.torque"`` (N m). The pinion is the input and sits at the
@@ -106,7 +139,8 @@ def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
     m = Model("gear_pair", input="pinion")
     m.add(p)
     m.add(w)
-    m.add(Mesh("mesh", "pinion", "wheel", mesh_stiffness, backlash, mesh_damping, side=1))
+    m.add(Mesh("mesh", "pinion", "wheel", mesh_stiffness, backlash, mesh_damping, side=1,
+               **_alternation("gear_pair.mesh_alternation", mesh_alternation)))
     if dofs != "torsional":
         if bearing_stiffness is None:
             raise ModelError("gear_pair.bearing_stiffness", f"required for dofs={dofs!r} "
@@ -227,7 +261,7 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
                     planet_bearing=None, carrier_bearing=None, sun_support=None,
                     ring_support=None, dofs: str = "planar", planet_angles=None,
                     carrier_inertia_diametral: float | None = None,
-                    name: str = "planetary_stage") -> Model:
+                    name: str = "planetary_stage", mesh_alternation=None) -> Model:
     """A planetary stage with carrier input and the ring held (the wind-turbine layout).
 
     Parameters
@@ -242,6 +276,11 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         :class:`Bearing`); the planet bearing's axes are radial/tangential, the others'
         are fixed. Supports go to the ground (to the housing inside a drivetrain).
     dofs : DOF level of every body.
+    mesh_alternation : None/False (constant mesh stiffness), True or a table of
+        ``contact_ratio`` (a number or a table ``sun_planet``, ``ring_planet``) and
+        ``stiffness_ratio``: every mesh alternates between single and double tooth-pair
+        contact at the mesh frequency (:class:`Mesh`), planet n's meshes phased by the planet
+        spacing (Parker & Lin 2004); the sun-ring phase is taken as 0.
 
     All bodies' coordinates are expressed in the frame rotating with the carrier (Lin & Parker
     1999). Bodies: ``carrier``, ``sun``, ``ring``, ``planet1..N`` (planet translations ``zeta``
@@ -306,8 +345,15 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
             m.add(Bearing(f"{pl}_bearing", pl, "carrier", axes_angle=a, **sup))
         # Carrier input: the planets drive the sun and push on the ring on the flanks that a
         # positive carrier rotation closes, i.e. Lin & Parker's mirrored line of action.
-        m.add(Mesh(f"sun_{pl}", "sun", pl, k_sp, backlash, mesh_damping, side=-1))
-        m.add(Mesh(f"ring_{pl}", "ring", pl, k_rp, backlash, mesh_damping, side=-1))
+        # mesh phases of planet n relative to planet 1 (Parker & Lin 2004): the ring's teeth
+        # pass planet n's position z_r psi_n / 2 pi periods later, the sun's z_s psi_n / 2 pi
+        # earlier (mesh_stiffness M3)
+        m.add(Mesh(f"sun_{pl}", "sun", pl, k_sp, backlash, mesh_damping, side=-1,
+                   **_alternation(f"{name}.mesh_alternation", mesh_alternation, "sun_planet",
+                                  -s.teeth * a / (2 * math.pi))))
+        m.add(Mesh(f"ring_{pl}", "ring", pl, k_rp, backlash, mesh_damping, side=-1,
+                   **_alternation(f"{name}.mesh_alternation", mesh_alternation, "ring_planet",
+                                  r.teeth * a / (2 * math.pi))))
     m.groups["planets"] = [f"planet{n}" for n in range(1, n_planets + 1)]
     m.output = "sun"
     return m.check()
@@ -316,13 +362,13 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
 def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash: float = 0.0,
                    mesh_damping: float = 0.0, gear_bearing=None, pinion_bearing=None,
                    dofs: str = "planar", position=(0.0, 0.0), angle: float = 0.0,
-                   name: str = "parallel_stage") -> Model:
+                   name: str = "parallel_stage", mesh_alternation=None) -> Model:
     """A parallel (speed-increasing) stage: ``gear`` (input, the large wheel) drives ``pinion``.
 
     ``position`` (m) is the centre of ``gear`` in the housing plane and ``angle`` (rad) the
     direction from it to the pinion. Bearings (N/m or tables, see :class:`Bearing`) go to the
     ground, or to the housing inside a drivetrain. A positive torque on ``gear`` closes the front
-    flank.
+    flank. ``mesh_alternation``: as for :func:`gear_pair`.
     """
     v.choice(f"{name}.dofs", dofs, DOF_LEVELS)
     g = _gear(gear, f"{name}.gear", "gear", dofs)
@@ -339,7 +385,8 @@ def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash:
     m = Model(name, input="gear")
     m.add(g)
     m.add(p)
-    m.add(Mesh("mesh", "gear", "pinion", mesh_stiffness, backlash, mesh_damping, side=1))
+    m.add(Mesh("mesh", "gear", "pinion", mesh_stiffness, backlash, mesh_damping, side=1,
+               **_alternation(f"{name}.mesh_alternation", mesh_alternation)))
     for label, spec, body in (("gear_bearing", gear_bearing, "gear"),
                               ("pinion_bearing", pinion_bearing, "pinion")):
         sup = _support(f"{name}.{label}", spec, dofs)

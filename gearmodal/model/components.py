@@ -210,6 +210,18 @@ class Mesh:
     ``pressure_angle`` (transverse, rad), ``base_radii`` (m, m), ``helix_angle`` (base helix,
     rad) and ``internal`` override the values derived from the gears (used by
     :func:`gearmodal.lin_parker_stage`, whose bodies carry no tooth data).
+
+    Mesh stiffness (a fidelity rung, :mod:`gearmodal.model.mesh_stiffness`): ``alternation =
+    False`` (default) keeps ``stiffness`` constant. ``alternation = True`` alternates it at the
+    mesh frequency between single and double tooth-pair contact, a rectangular wave (M1) whose
+    mean is ``stiffness`` (ISO 6336's mean mesh stiffness c_gamma), with the double-pair
+    stiffness ``stiffness_ratio`` times the single-pair one (default 1.75, which makes the mean
+    ISO 6336-1's c_gamma = c' (0.75 eps + 0.25) for any contact ratio). ``contact_ratio`` is
+    the transverse contact ratio eps in (1, 2): the fraction eps - 1 of each mesh period has two
+    pairs in contact; by default it is computed from the gears (standard addendum of one
+    module, no profile shift). ``phase`` is the fraction of a mesh period elapsed at input
+    azimuth 0 (0 = the start of a double-pair zone). The wave runs on the nominal rotation of
+    the gears, so it switches at known times: the exact method switches at them exactly.
     """
 
     name: str
@@ -223,10 +235,27 @@ class Mesh:
     base_radii: tuple | None = None
     helix_angle: float | None = None
     internal: bool | None = None
+    alternation: bool = False
+    contact_ratio: float | None = None
+    stiffness_ratio: float = 1.75
+    phase: float = 0.0
 
     def __post_init__(self):
         f = self.name
         v.name("Mesh.name", self.name)
+        if not isinstance(self.alternation, bool):
+            raise ModelError(f"{f}.alternation", f"expected true/false, got "
+                             f"{self.alternation!r}")
+        if self.contact_ratio is not None:
+            self.contact_ratio = v.number(f"{f}.contact_ratio", self.contact_ratio)
+            if not 1.0 < self.contact_ratio < 2.0:
+                raise ModelError(f"{f}.contact_ratio", f"= {self.contact_ratio!r}: must lie in "
+                                 "(1, 2) (single/double tooth-pair alternation)")
+        self.stiffness_ratio = v.number(f"{f}.stiffness_ratio", self.stiffness_ratio)
+        if not 1.0 <= self.stiffness_ratio <= 10.0:
+            raise ModelError(f"{f}.stiffness_ratio", f"= {self.stiffness_ratio!r}: must lie in "
+                             "[1, 10] (double-pair over single-pair stiffness)")
+        self.phase = v.number(f"{f}.phase", self.phase)
         self.stiffness = v.nonnegative(f"{f}.stiffness", self.stiffness, "N/m")
         self.backlash = v.nonnegative(f"{f}.backlash", self.backlash, "m")
         self.damping = v.nonnegative(f"{f}.damping", self.damping, "N s/m")

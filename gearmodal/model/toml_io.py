@@ -55,7 +55,12 @@ Planetary stage (``[planetary_stage]`` or a ``[[stages]]`` entry)
     ``mesh_stiffness`` (N/m, a number or ``{sun_planet = .., ring_planet = ..}``), ``backlash``
     (m), ``mesh_damping`` (N s/m), ``n_planets`` (default 3), ``planet_angles_deg`` (default equally
     spaced), ``dofs`` (default ``"planar"``), and the supports ``planet_bearing``,
-    ``carrier_bearing``, ``sun_support``, ``ring_support``.
+    ``carrier_bearing``, ``sun_support``, ``ring_support``. ``mesh_alternation`` (every stage
+    and the gear pair; default false): true, or a table of ``contact_ratio`` (a number or
+    ``{sun_planet = .., ring_planet = ..}``; default from the gears), ``stiffness_ratio``
+    (default 1.75) and ``phase``, makes the mesh stiffness alternate between single and double
+    tooth-pair contact at the mesh frequency around ``mesh_stiffness`` as its mean
+    (:mod:`gearmodal.model.mesh_stiffness`).
 
 Parallel stage (``[parallel_stage]`` or a ``[[stages]]`` entry)
     ``[<stage>.gear]`` (the large input wheel), ``[<stage>.pinion]``; ``mesh_stiffness``,
@@ -224,7 +229,9 @@ _STAGE_COMMON = {"type": (False, "planetary or parallel"), "name": (False, "stri
                  "coupling_stiffness": (False, "N m/rad"),
                  "dofs": (False, "torsional, planar or full"),
                  "mesh_stiffness": (True, "N/m"), "backlash": (False, "m"),
-                 "mesh_damping": (False, "N s/m")}
+                 "mesh_damping": (False, "N s/m"),
+                 "mesh_alternation": (False, "true/false or a table of contact_ratio, "
+                                             "stiffness_ratio, phase")}
 _PLANETARY_KEYS = {**_STAGE_COMMON, "n_planets": (False, "integer"),
                    "planet_angles_deg": (False, "list of deg"), "carrier": (True, "table"),
                    "sun": (True, "table"), "planet": (True, "table"), "ring": (True, "table"),
@@ -237,7 +244,8 @@ _PARALLEL_KEYS = {**_STAGE_COMMON, "position": (False, "[x, y] in m"),
 _GEAR_PAIR_KEYS = {"dofs": (False, "torsional, planar or full"),
                    "mesh_stiffness": (True, "N/m"), "backlash": (True, "m"),
                    "mesh_damping": (False, "N s/m"), "bearing": (False, "support"),
-                   "pinion": (True, "table"), "wheel": (True, "table")}
+                   "pinion": (True, "table"), "wheel": (True, "table"),
+                   "mesh_alternation": _STAGE_COMMON["mesh_alternation"]}
 _LIN_PARKER_KEYS = {"n_planets": (True, "integer"), "pressure_angle_deg": (True, "deg"),
                     "planet_angles_deg": (False, "list of deg"), "backlash": (False, "m"),
                     "mesh_damping": (False, "N s/m"), "mass": (True, "table, kg"),
@@ -540,7 +548,7 @@ def _planetary(path: str, value, in_drivetrain: bool = False) -> Model:
             carrier_inertia_diametral=carrier.get("inertia_diametral"),
             mesh_stiffness=k, backlash=t.get("backlash", 0.0),
             mesh_damping=t.get("mesh_damping", 0.0), dofs=t.get("dofs", "planar"),
-            planet_angles=angles, **supports)
+            planet_angles=angles, mesh_alternation=t.get("mesh_alternation"), **supports)
 
 
 def _parallel(path: str, value, in_drivetrain: bool = False) -> Model:
@@ -564,7 +572,8 @@ def _parallel(path: str, value, in_drivetrain: bool = False) -> Model:
         return builders.parallel_stage(
             gear, pinion, mesh_stiffness=t["mesh_stiffness"], backlash=t.get("backlash", 0.0),
             mesh_damping=t.get("mesh_damping", 0.0), dofs=t.get("dofs", "planar"),
-            position=tuple(position), angle=angle, **supports)
+            position=tuple(position), angle=angle,
+            mesh_alternation=t.get("mesh_alternation"), **supports)
 
 
 def _gear_pair(path: str, value) -> Model:
@@ -578,7 +587,8 @@ def _gear_pair(path: str, value) -> Model:
     with _at(path, renames):
         return builders.gear_pair(pinion, wheel, t["mesh_stiffness"], t["backlash"],
                                   mesh_damping=t.get("mesh_damping", 0.0),
-                                  dofs=t.get("dofs", "torsional"), bearing_stiffness=bearing)
+                                  dofs=t.get("dofs", "torsional"), bearing_stiffness=bearing,
+                                  mesh_alternation=t.get("mesh_alternation"))
 
 
 def _lin_parker(path: str, value) -> Model:

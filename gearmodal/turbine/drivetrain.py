@@ -58,7 +58,15 @@ import pandas as pd
 import scipy.linalg as sla
 
 from ..errors import ModelError
-from ..integrate import METHODS, SimulationResult, _result, _shift, event_array, reconcile
+from ..integrate import (
+    METHODS,
+    SimulationResult,
+    _result,
+    _shift,
+    event_array,
+    mesh_stiffness,
+    reconcile,
+)
 from ..integrate.refreeze import AzimuthAssembler, QuasiStatic
 from ..integrate.system import PiecewiseLinearSystem
 from ..static import equilibrium
@@ -364,7 +372,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             az_grid[kk + a0:k * m_sub + j_end + 1] = (om_f * (tt[j + a0:j_end + 1] - t_f)
                                                       + psi_f + mount)
             om_grid[kk + a0:k * m_sub + j_end + 1] = om_f
-            X, S, ev, st = runner(system, dt, j_end - j, F, x, s, **options)
+            X, S, ev, st = runner(system, dt, j_end - j, F, x, s,
+                                  azimuth0=om_f * (tj - t_f) + psi_f + mount, **options)
             events.append(_shift(ev, tj))
             if not Ss:  # the initial state (the accelerating equilibrium)
                 Ss.append(S[:1])
@@ -397,7 +406,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 "method": method, "options": options,
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
     sim = _result([tuple(sg_) for sg_ in segs], t_grid, X, S, events, s_init, stats,
-                  settings)
+                  mesh_stiffness(segs[0][2], az_grid), settings)
     # springs across turning frames at their exact geometry (not the segment's frozen rows)
     Q, V = X[:, :n], X[:, n:]
     Fs = geo.spring_forces(az_grid, om_grid, Q, V)
