@@ -36,9 +36,11 @@ planetary stage alone (``benchmarks/clearance_shape.py``).
 instead of the rungs: the step ladder from 4x the reference's refreeze angle and ``dt`` down,
 until a rung agrees within ``TOL`` with the next two finer ones (``DIR/auto.csv``).
 
-Rungs not in the ladder yet (issue "fidelity ladder"): mesh-stiffness alternation. The DOF
-level of the gearbox stages is a rung (``stages_dofs``), listed when the model can be built at
-that level.
+The rung ``mesh_alternating`` makes every mesh's stiffness alternate between single and
+double tooth-pair contact at its mesh frequency around the reference's constant stiffness as
+its mean (``mesh_alternation = true`` on every stage, :mod:`gearmodal.model.mesh_stiffness`;
+contact ratios from the gears). The DOF level of the gearbox stages is a rung
+(``stages_dofs``), listed when the model can be built at that level.
 """
 
 from __future__ import annotations
@@ -101,6 +103,10 @@ def rungs(quick: bool) -> list[tuple[str, str, str, dict]]:
                     {"model.stages.0.carrier_bearing": {
                         **CLEARANCE, "clearance_shape": "polygon", "facets": facets,
                         "ramps": ramps}}))
+    out.append(("mesh_alternating", "mesh stiffness",
+                "single/double tooth-pair alternation at the mesh frequency, every stage "
+                "(constant mean stiffness in the reference)",
+                {f"model.stages.{i}.mesh_alternation": True for i in range(3)}))
     for level in ("torsional", "full"):
         out.append((f"dofs_{level}", "stages_dofs", f"all stages {level}",
                     {f"model.stages.{i}.dofs": level for i in range(3)}))
