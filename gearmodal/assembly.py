@@ -264,6 +264,10 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     each other is frozen there). Returns an :class:`Assembly`.
     """
     model.check()
+    pinned = [b.name for b in model.bodies.values()
+              if b.pinned_to is not None and 0 not in b.local_indices]
+    if pinned:
+        return _on_pins(model, pinned, azimuth)
     bodies = list(model.bodies.values())
     slices, start = {}, 0
     for b in bodies:
@@ -463,3 +467,86 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     return Assembly(dof_names=model.dof_names, load_names=load_names, M=M, C=C, K=K, G=G,
                     K_cent=Kc, f_cent=fc, B=B, contacts=contacts, azimuth=azimuth,
                     body_slices=slices, springs=springs, round=round_)
+
+
+def _skew(a: np.ndarray) -> np.ndarray:
+    """[a]x: the matrix of ``a x (.)``."""
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def _on_pins(model: Model, pinned: list[str], azimuth: float) -> Assembly:
+    """Assembly of a model whose torsional bodies ``pinned`` ride on their hosts' pins
+    (``Body.pinned_to``). The model is assembled with those bodies at ``planar`` and their
+    centre translations eliminated as the motion of the host's point at their centre:
+
+        (P1)  u_pin = T_h,u q_h + (T_h,r q_h) x (c_b - c_h),   [x_b, y_b] = R_b^+ u_pin
+
+    (``T_h`` the host's body transform, rows u translation and r rotation; ``c`` centres;
+    ``R_b`` the body's local x/y axes). With ``q = N z`` every matrix is projected
+    (``N^T M N``, ``W N``...), so a planet's mass adds ``m r^2`` to its carrier's rotation and
+    its bearing to the carrier, whose deflection vanishes, drops out."""
+    mx = model.copy()
+    for name in pinned:
+        mx.bodies[name].dofs = "planar"
+        mx.bodies[name].pinned_to = None
+    full = assemble(mx, azimuth)
+    n = full.n
+    sl = full.body_slices
+    keep = np.ones(n, dtype=bool)
+    for name in pinned:
+        keep[[sl[name].start, sl[name].start + 1]] = False  # planar order: x, y, theta
+    idx = np.flatnonzero(keep)
+    pos = np.full(n, -1)
+    pos[idx] = np.arange(len(idx))
+    N = np.zeros((n, len(idx)))
+    N[idx, np.arange(len(idx))] = 1.0
+    for name in pinned:
+        b, h = model.bodies[name], model.bodies[model.bodies[name].pinned_to]
+        Th = _body_transform(model, h, azimuth)
+        arm = _centre(model, b, azimuth) - _centre(model, h, azimuth)
+        G = Th[:3] - _skew(arm) @ Th[3:]  # (P1): w x arm = -arm x w
+        R = _body_transform(mx, mx.bodies[name], azimuth)[:3, :2]
+        hcols = pos[sl[h.name].start:sl[h.name].stop]
+        N[np.ix_([sl[name].start, sl[name].start + 1], hcols)] = np.linalg.pinv(R) @ G
+
+    def red(c: Contacts | None) -> Contacts | None:
+        if c is None:
+            return None
+        W = proj(c.W, left=False)
+        rows = [i for i in range(len(c)) if _acts(W[i])]
+        new = -np.ones(len(c), dtype=np.int64)
+        new[rows] = np.arange(len(rows))
+        var = c.variation
+        if var is not None and len(var):
+            ok = new[var.rows] >= 0
+            var = MeshVariation(new[var.rows][ok], var.rate[ok], var.phase[ok],
+                                var.double[ok], var.k_single[ok], var.k_double[ok])
+        return Contacts(element=[c.element[i] for i in rows],
+                        contact=[c.contact[i] for i in rows], kind=[c.kind[i] for i in rows],
+                        W=W[rows].reshape(len(rows), len(idx)), offset=c.offset[rows],
+                        stiffness=c.stiffness[rows], damping=c.damping[rows],
+                        nominal=c.nominal[rows], angle=c.angle[rows], variation=var)
+
+    def proj(X: np.ndarray, left: bool = True, right: bool = True) -> np.ndarray:
+        """N^T X N (or one side); entries below 1e-13 of X's largest are the rounding of
+        cancelled terms (a planet's gyroscopic coupling on a torsional carrier) and are set
+        to 0, so that fields which do not turn with the azimuth stay exactly constant."""
+        Y = (N.T @ X) if left else X
+        Y = (Y @ N) if right else Y
+        Y = np.array(Y, dtype=float)
+        Y[np.abs(Y) < 1e-13 * np.abs(X).max(initial=0.0)] = 0.0
+        return Y
+
+    loads = set(model.load_names)
+    cols = [j for j, ln in enumerate(full.load_names) if ln in loads]
+    slices = {}
+    for name, s_ in sl.items():
+        kept = pos[s_.start:s_.stop]
+        kept = kept[kept >= 0]
+        slices[name] = slice(int(kept[0]), int(kept[-1]) + 1)
+    return Assembly(dof_names=[full.dof_names[i] for i in idx],
+                    load_names=[full.load_names[j] for j in cols], M=proj(full.M),
+                    C=proj(full.C), K=proj(full.K), G=proj(full.G), K_cent=proj(full.K_cent),
+                    f_cent=proj(full.f_cent, right=False), B=proj(full.B[:, cols], right=False),
+                    contacts=red(full.contacts), azimuth=azimuth,
+                    body_slices=slices, springs=red(full.springs), round=red(full.round))

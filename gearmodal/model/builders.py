@@ -331,6 +331,7 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         pl.position = (centre * math.cos(a), centre * math.sin(a), 0.0)
         pl.orientation = a
         pl.coordinate_names = {"x": "zeta", "y": "eta"}
+        pl.pinned_to = "carrier"  # a torsional planet rides on its carrier pin
         m.add(pl)
     for label, spec, body in (("carrier_bearing", carrier_bearing, "carrier"),
                               ("sun_support", sun_support, "sun"),

@@ -69,6 +69,11 @@ class Body:
     rotation_scale : if given, the rotational coordinate is ``u = rotation_scale * theta`` (m),
         as in Lin & Parker's ``u = r theta``; otherwise it is ``theta`` (rad).
     coordinate_names : optional renaming of local coordinates, e.g. ``{"x": "zeta"}``.
+    pinned_to : name of a body (in the same frame) whose pin carries this body's centre when
+        this body's level has no translations (``torsional``), as a planet rides on its
+        carrier: the centre then moves with the pin's point of that body (P1 in
+        :func:`gearmodal.assembly.assemble`) instead of staying fixed in the frame. Ignored at
+        ``planar``/``full``.
     """
 
     name: str = ""
@@ -82,6 +87,7 @@ class Body:
     speed_ratio: float = 0.0
     rotation_scale: float | None = None
     coordinate_names: dict = field(default_factory=dict)
+    pinned_to: str | None = None
 
     def _label(self) -> str:
         return self.name or type(self).__name__
@@ -109,6 +115,8 @@ class Body:
         self.speed_ratio = v.number(f"{f}.speed_ratio", self.speed_ratio)
         if self.rotation_scale is not None:
             self.rotation_scale = v.positive(f"{f}.rotation_scale", self.rotation_scale, "m")
+        if self.pinned_to is not None and not isinstance(self.pinned_to, str):
+            raise ModelError(f"{f}.pinned_to", f"expected a body name, got {self.pinned_to!r}")
 
     # -- coordinates ---------------------------------------------------------------------
     @property

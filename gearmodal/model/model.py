@@ -90,6 +90,8 @@ class Model:
             nb.name = p(b.name)
             nb.frame = b.frame if b.frame == GROUND else p(b.frame)
             nb.coordinate_names = dict(b.coordinate_names)
+            if b.pinned_to is not None:
+                nb.pinned_to = p(b.pinned_to)
             self.bodies[self._free(nb.name)] = nb
         for m in other.meshes.values():
             nm = copy.copy(m)
@@ -151,6 +153,12 @@ class Model:
             if b.frame not in self.frames:
                 raise ModelError(f"{b.name}.frame", f"= {b.frame!r}: no such frame; frames: "
                                  + ", ".join(self.frames))
+            if b.pinned_to is not None:
+                h = self.bodies.get(b.pinned_to)
+                if h is None or h is b or h.pinned_to is not None or h.frame != b.frame:
+                    raise ModelError(f"{b.name}.pinned_to", f"= {b.pinned_to!r}: must name "
+                                     f"another body in frame {b.frame!r} that is not itself "
+                                     "pinned")
         from .components import Gear
         for m in self.meshes.values():
             for side in ("gear_a", "gear_b"):

@@ -36,9 +36,10 @@ geometry correction absorbs to first order.
 
 Loads on the gearbox: the rotor's aerodynamic torque on ``rotor.torque``, the generator torque
 on ``generator.torque`` and the shaft-end force on the first planetary carrier
-(``stageN.carrier.force_x`` = global ``y``, ``force_y`` = global ``z``): the rear main-bearing
-reaction of :meth:`gearmodal.turbine.Turbine.rear_force` (rotor weight, thrust, tilt and yaw
-moments, shear forces). Gravity on the gearbox internals is not modelled.
+(``stageN.carrier.force_x`` = global ``y``, ``force_y`` = global ``z``; not modelled when the
+carrier has no translation, a torsional stage): the rear main-bearing reaction of
+:meth:`gearmodal.turbine.Turbine.rear_force` (rotor weight, thrust, tilt and yaw moments,
+shear forces). Gravity on the gearbox internals is not modelled.
 
 The mounting azimuth ``Turbine.mounting_azimuth_deg`` is the angle from blade 1 to planet 1 in
 the direction of rotation: 0 puts planet 1 on blade 1's radius.
@@ -222,20 +223,26 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             raise ModelError("gearbox", f"has no DOF {name!r}: the drivetrain model needs "
                              "bodies 'rotor' and 'generator' (see studies/models/600kw.toml)")
     carrier_x = _names(asm0, ".carrier.force_x")
-    if carrier_x is None:
-        raise ModelError("gearbox", "has no planetary carrier load 'stageN.carrier.force_x' "
-                         "to carry the shaft-end force")
-    carrier_y = carrier_x[:-1] + "y"
+    # a torsional first stage has no carrier translation: the shaft-end force is not modelled
+    # (its columns are zero; the turbine's loads table still reports it)
+    bending = carrier_x is not None
+    if not bending and _names(asm0, ".carrier.torque") is None:
+        raise ModelError("gearbox", "has no planetary carrier 'stageN.carrier' to carry the "
+                         "shaft-end force")
     n = asm0.n
     i_rot, i_gen = asm0.dof_names.index("rotor.theta"), asm0.dof_names.index("generator.theta")
     j_rot, j_gen = asm0.load_names.index("rotor.torque"), asm0.load_names.index("generator.torque")
-    j_fx, j_fy = asm0.load_names.index(carrier_x), asm0.load_names.index(carrier_y)
+    if bending:
+        carrier_y = carrier_x[:-1] + "y"
+        j_fx, j_fy = asm0.load_names.index(carrier_x), asm0.load_names.index(carrier_y)
+    else:
+        j_fx = j_fy = j_rot  # multiplied by the zeroed force below
     r = rigid_rotation(asm0)
     statics = QuasiStatic(r[:, None], asm0.M)
     load_cols = None
     if input_basis and method == "exact" and geo.exact:
         a, b = geo.coef["B"]  # B(psi) = sum_h a_h cos(h psi) + b_h sin(h psi)
-        used = [j_rot, j_gen, j_fx, j_fy]
+        used = [j_rot, j_gen, j_fx, j_fy] if bending else [j_rot, j_gen]
         load_cols = np.concatenate([a[:, :, used].transpose(1, 0, 2).reshape(n, -1),
                                     b[:, :, used].transpose(1, 0, 2).reshape(n, -1)], axis=1)
     Mr = asm0.M @ r
@@ -305,6 +312,9 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             u = u_now[None, :] + np.outer((tt - t) / aero_dt, u_now - prev)
         else:
             u = np.repeat(u_now[None, :], m_sub + 1, axis=0)
+        if not bending:
+            u = u.copy()
+            u[:, 1:] = 0.0  # no carrier translation to take the shaft-end force
         prev = u_now
         drift = abs(om - om_f) > refreeze_speed * max(abs(om_f), 1e-3)
         j = 0
@@ -333,7 +343,9 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                     # a refreeze for the azimuth only turns the geometry: the spectrum moves
                     # little, so the last bound serves (with taylor.RHO_MARGIN)
                     system.rho_base = prev_rho
-                loads_j = {"rotor.torque": u[j, 0], carrier_x: u[j, 1], carrier_y: u[j, 2]}
+                loads_j = {"rotor.torque": u[j, 0]}
+                if bending:
+                    loads_j.update({carrier_x: u[j, 1], carrier_y: u[j, 2]})
                 if s is None:
                     # at the initial azimuth's exact geometry (the frozen segment with its
                     # geometry correction reproduces it at t = 0)
@@ -404,6 +416,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 "mounting_azimuth_deg": turbine.mounting_azimuth_deg,
                 "refreeze_deg": refreeze_deg, "refreeze_speed": refreeze_speed,
                 "method": method, "options": options,
+                "shaft_end_force": "on the carrier" if bending else "not modelled (the first "
+                "stage's carrier has no translation)",
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
     sim = _result([tuple(sg_) for sg_ in segs], t_grid, X, S, events, s_init, stats,
                   mesh_stiffness(segs[0][2], az_grid), settings)
