@@ -484,7 +484,10 @@ def _on_pins(model: Model, pinned: list[str], azimuth: float) -> Assembly:
     (``T_h`` the host's body transform, rows u translation and r rotation; ``c`` centres;
     ``R_b`` the body's local x/y axes). With ``q = N z`` every matrix is projected
     (``N^T M N``, ``W N``...), so a planet's mass adds ``m r^2`` to its carrier's rotation and
-    its bearing to the carrier, whose deflection vanishes, drops out."""
+    its bearing to the carrier, whose deflection vanishes, drops out. It is the stiff-bearing
+    limit of the planar stage, including Lin & Parker's centripetal softening: at speed the
+    planets' ``-m Omega^2`` on their translations projects to ``-m r^2 Omega^2`` on the
+    carrier's rotation (as in the planar stage, whose bearings hold the planets)."""
     mx = model.copy()
     for name in pinned:
         mx.bodies[name].dofs = "planar"

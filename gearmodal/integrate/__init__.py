@@ -191,7 +191,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
             s = system.penetration(x) > 0
             s_init = s.copy()
         else:
-            s = reconcile(system, x, s, k0 * dt, events)
+            s = reconcile(system, x, s, k0 * dt, events, omega * k0 * dt)
         ts = t[k0:k1 + 1]
         U = _load_grid(seg_asm, loads, ts)
         F = U @ seg_asm.B.T + system.f_const[None, :]
@@ -249,15 +249,17 @@ def event_array(chunks) -> np.ndarray:
 
 
 def reconcile(system: PiecewiseLinearSystem, x: np.ndarray, s: np.ndarray, t: float,
-              events: list) -> np.ndarray:
+              events: list, azimuth: float | None = None) -> np.ndarray:
     """Contact state at a refreeze: the refrozen geometry moves the gaps slightly, so a contact
     whose state no longer matches its penetration switches at time ``t`` and is logged in
-    ``events``. Returns the new state."""
+    ``events`` (its force with the stiffness at input azimuth ``azimuth``, rad, if given).
+    Returns the new state."""
     p, r = system.penetration(x), system.rate(x)
+    k = system.stiffness_at(azimuth) if azimuth is not None else system.k
     s = s.copy()
     for e in np.flatnonzero((p > 0) != s):
         s[e] = not s[e]
-        force = system.k[e] * max(p[e], 0.0) + system.c[e] * r[e] if s[e] else 0.0
+        force = k[e] * max(p[e], 0.0) + system.c[e] * r[e] if s[e] else 0.0
         events.append((t, int(e), not s[e], bool(s[e]), float(r[e]), float(force)))
     return s
 
@@ -291,7 +293,11 @@ def _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm) -> None:
         red = seg_casm.reduced()
         Z, Zd, Ss = X[k0:k1 + 1, :n], X[k0:k1 + 1, n:], S[k0:k1 + 1]
         c = red.contacts
-        Fc = np.where(Ss, c.stiffness * (Z @ c.W.T - c.offset) + c.damping * (Zd @ c.W.T), 0.0)
+        K = c.stiffness
+        if c.variation is not None and len(c.variation):  # alternating meshes: k(t)
+            K = np.repeat(c.stiffness[None, :], k1 + 1 - k0, axis=0)
+            K[:, c.variation.rows] = c.variation.stiffness(om * result.t[k0:k1 + 1], om < 0)
+        Fc = np.where(Ss, K * (Z @ c.W.T - c.offset) + c.damping * (Zd @ c.W.T), 0.0)
         rhs = (U @ red.B.T + om**2 * red.f_cent - Zd @ (red.C + om * red.G).T
                - Z @ (red.K + om**2 * red.K_cent).T - Fc @ c.W)
         Zdd = np.linalg.solve(red.M, rhs.T).T
@@ -312,7 +318,7 @@ def mesh_stiffness(system: PiecewiseLinearSystem, azimuth: np.ndarray):
     azimuths (len(t), rows), or None without alternation (the result's forces use it)."""
     if not system.alternating:
         return None
-    return system.variation.rows, system.variation.stiffness(azimuth)
+    return system.variation.rows, system.variation.stiffness(azimuth, system.omega < 0)
 
 
 def _result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings) -> SimulationResult:

@@ -130,7 +130,7 @@ class PiecewiseLinearSystem:
         if not self.alternating:
             return self.k
         k = self.k.copy()
-        k[self.variation.rows] = self.variation.stiffness(azimuth)[0]
+        k[self.variation.rows] = self.variation.stiffness(azimuth, self.omega < 0)[0]
         return k
 
     def schedule(self, azimuth0: float, duration: float):

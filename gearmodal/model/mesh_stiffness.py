@@ -32,7 +32,10 @@ transverse contact ratio of standard gears (addendum one module, no profile shif
 
 with the upper signs for an external pair (``a = r_a + r_b``, ``ra = r + m``) and the lower
 ones for an internal pair, gear a the ring (``a = r_a - r_b``, ``ra_a = r_a - m``). Helical
-overlap smooths the wave; it is not modelled (give ``contact_ratio`` to represent it).
+overlap smooths the wave; it is not modelled (give ``contact_ratio`` to represent it). Both
+flanks of a mesh follow the same wave; the back flank's tooth-pair cycle is really shifted by
+the tooth thickness, which is not modelled (the back flank carries load only in rattle or
+double contact).
 """
 
 from __future__ import annotations
@@ -79,11 +82,17 @@ class MeshVariation:
     def __len__(self) -> int:
         return len(self.rows)
 
-    def stiffness(self, psi) -> np.ndarray:
-        """Stiffness (M1) of every entry at input azimuths ``psi`` (rad): (len(psi), len)."""
+    def stiffness(self, psi, backward: bool = False) -> np.ndarray:
+        """Stiffness (M1) of every entry at input azimuths ``psi`` (rad): (len(psi), len).
+
+        The value just after the instant in time: with the azimuth rising, (M1) as written;
+        ``backward`` (the input turning backwards) takes the limit from below in ``phi``, so a
+        run starting on a boundary starts with the interval it enters."""
         phi = np.multiply.outer(np.atleast_1d(np.asarray(psi, dtype=float)), self.rate) \
             + self.phase
-        return np.where(phi - np.floor(phi) < self.double, self.k_double, self.k_single)
+        f = phi - np.floor(phi)
+        double = ((f > 0.0) & (f <= self.double)) if backward else (f < self.double)
+        return np.where(double, self.k_double, self.k_single)
 
     def schedule(self, psi0: float, omega: float, t_end: float):
         """The stiffness changes in ``(0, t_end]`` when the input azimuth is ``psi0 + omega t``
@@ -108,6 +117,8 @@ class MeshVariation:
                 rows.append(np.full(int(ok.sum()), self.rows[i], dtype=np.int64))
                 ks.append(np.full(int(ok.sum()), self.k_double[i] if enters_double
                                   else self.k_single[i]))
+        if not times:
+            return np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(0)
         t = np.concatenate(times)
         order = np.argsort(t, kind="stable")
         return t[order], np.concatenate(rows)[order], np.concatenate(ks)[order]
@@ -126,6 +137,10 @@ def mesh_rate(model, mesh, a, b) -> float:
         ra = a.teeth * abs(a.speed_ratio - nf)
         rb = b.teeth * abs(b.speed_ratio - nf)
         if math.isclose(ra, rb, rel_tol=1e-9, abs_tol=1e-12):
+            if ra == 0.0:
+                raise ModelError(f"{mesh.name}.alternation", f"{a.name!r} and {b.name!r} do "
+                                 "not turn against their frame (speed ratios), so the mesh "
+                                 "has no frequency")
             return ra / (2.0 * math.pi)
     raise ModelError(f"{mesh.name}.alternation", f"the speed ratios of {a.name!r} and "
                      f"{b.name!r} do not roll on each other (teeth x speed relative to "

@@ -222,13 +222,15 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         if name not in asm0.dof_names:
             raise ModelError("gearbox", f"has no DOF {name!r}: the drivetrain model needs "
                              "bodies 'rotor' and 'generator' (see studies/models/600kw.toml)")
-    carrier_x = _names(asm0, ".carrier.force_x")
-    # a torsional first stage has no carrier translation: the shaft-end force is not modelled
-    # (its columns are zero; the turbine's loads table still reports it)
-    bending = carrier_x is not None
-    if not bending and _names(asm0, ".carrier.torque") is None:
+    # the first stage's carrier takes the shaft-end force; a torsional one has no
+    # translation, so the force is not modelled (its columns are zero; the turbine's loads
+    # table still reports it)
+    carrier = next((b for b in gearbox.bodies if b.endswith(".carrier")), None)
+    if carrier is None:
         raise ModelError("gearbox", "has no planetary carrier 'stageN.carrier' to carry the "
                          "shaft-end force")
+    carrier_x = f"{carrier}.force_x"
+    bending = carrier_x in asm0.load_names
     n = asm0.n
     i_rot, i_gen = asm0.dof_names.index("rotor.theta"), asm0.dof_names.index("generator.theta")
     j_rot, j_gen = asm0.load_names.index("rotor.torque"), asm0.load_names.index("generator.torque")
@@ -355,7 +357,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                     s = system.penetration(x) > 0
                     s_init = s.copy()
                 else:
-                    s = reconcile(system, x, s, tj, events)
+                    s = reconcile(system, x, s, tj, events, psi_f + mount)
                 stats["n_freezes"] += 1
                 segs.append([kk, kk, system])
                 # first-order geometry correction on the static deflection, linear in time
