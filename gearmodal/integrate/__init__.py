@@ -295,8 +295,7 @@ def _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm) -> None:
         c = red.contacts
         K = c.stiffness
         if c.variation is not None and len(c.variation):  # alternating meshes: k(t)
-            K = np.repeat(c.stiffness[None, :], k1 + 1 - k0, axis=0)
-            K[:, c.variation.rows] = c.variation.stiffness(om * result.t[k0:k1 + 1], om < 0)
+            K = c.variation.table(c.stiffness, om * result.t[k0:k1 + 1], om < 0)
         Fc = np.where(Ss, K * (Z @ c.W.T - c.offset) + c.damping * (Zd @ c.W.T), 0.0)
         rhs = (U @ red.B.T + om**2 * red.f_cent - Zd @ (red.C + om * red.G).T
                - Z @ (red.K + om**2 * red.K_cent).T - Fc @ c.W)
@@ -314,11 +313,11 @@ def _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm) -> None:
 
 
 def mesh_stiffness(system: PiecewiseLinearSystem, azimuth: np.ndarray):
-    """``(rows, k)``: the alternating mesh flanks' stiffness at the output times' input
-    azimuths (len(t), rows), or None without alternation (the result's forces use it)."""
+    """Every contact's stiffness at the output times' input azimuths (len(t), contacts), or
+    None without alternating meshes (the result's forces use it)."""
     if not system.alternating:
         return None
-    return system.variation.rows, system.variation.stiffness(azimuth, system.omega < 0)
+    return system.variation.table(system.k, azimuth, system.omega < 0)
 
 
 def _result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings) -> SimulationResult:
@@ -395,10 +394,8 @@ class _Tables:
         for k0, k1, sy in seg_systems:  # each segment with the geometry it was frozen at
             P[k0:k1 + 1] = X[k0:k1 + 1, :n] @ sy.W.T - sy.offset
             R[k0:k1 + 1] = X[k0:k1 + 1, n:] @ sy.W.T
-        K = system.k
-        if self.mesh_k is not None:  # alternating mesh flanks: their stiffness at each time
-            K = np.repeat(system.k[None, :], len(t), axis=0)
-            K[:, self.mesh_k[0]] = self.mesh_k[1]
+        # alternating mesh flanks: every contact's stiffness at each time
+        K = system.k if self.mesh_k is None else self.mesh_k
         Fc = np.where(S, K * P + system.c * R, 0.0)
         # one column per mesh flank, one per bearing direction (its two dead-band sides
         # combined; a polygon's facet forces resolved on the bearing's x and y axes)

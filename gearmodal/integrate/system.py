@@ -129,9 +129,7 @@ class PiecewiseLinearSystem:
         alternating mesh flanks at their value there (mesh_stiffness M1)."""
         if not self.alternating:
             return self.k
-        k = self.k.copy()
-        k[self.variation.rows] = self.variation.stiffness(azimuth, self.omega < 0)[0]
-        return k
+        return self.variation.table(self.k, azimuth, self.omega < 0)[0]
 
     def schedule(self, azimuth0: float, duration: float):
         """Stiffness changes ``(times, rows, k)`` over ``(0, duration]`` s of a run starting at

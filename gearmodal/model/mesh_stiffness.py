@@ -94,6 +94,13 @@ class MeshVariation:
         double = ((f > 0.0) & (f <= self.double)) if backward else (f < self.double)
         return np.where(double, self.k_double, self.k_single)
 
+    def table(self, k: np.ndarray, psi, backward: bool = False) -> np.ndarray:
+        """Every contact's stiffness at input azimuths ``psi``: ``k`` (the means, one per
+        contact) with the alternating rows at their (M1) values; (len(psi), len(k))."""
+        out = np.repeat(np.asarray(k, dtype=float)[None, :], np.size(psi), axis=0)
+        out[:, self.rows] = self.stiffness(psi, backward)
+        return out
+
     def schedule(self, psi0: float, omega: float, t_end: float):
         """The stiffness changes in ``(0, t_end]`` when the input azimuth is ``psi0 + omega t``
         (rad, rad/s): ``(times, rows, k)`` sorted by time, each the new stiffness of a contact
