@@ -34,14 +34,25 @@ turbine case) never satisfies (A2); the choice then reports ``met = False`` with
 what was run, and a scene run with ``method = "auto"`` raises naming ``scene.tolerance``.
 The ladder refines the numerical settings only; the model's own fidelity (clearance shape,
 DOF level) is the scene's choice.
+
+Resume: with ``store=DIR`` every rung's settings, CPU time and summary are written to
+``DIR/rung<l>.json`` as it finishes (atomically), under the scene's fingerprint (SHA-256 of
+the pickled scene, ``DIR/auto_store.json``). Started again on the same scene and store, the
+ladder loads the finished rungs and runs only the others; a different scene is refused. The
+store keeps summaries, not time series: when the chosen rung was loaded, it is run once more
+to return its result (the runs are deterministic, so that result is the stored rung's).
 """
 
 from __future__ import annotations
 
 import copy
+import hashlib
 import json
 import math
+import os
+import pickle
 import time
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -99,6 +110,59 @@ def _rung_settings(scene, base: dict, f: float) -> dict:
     return st
 
 
+def fingerprint(scene) -> str:
+    """SHA-256 of the pickled scene (model, loads, turbine, wind, settings): what a
+    :func:`choose` store is keyed by. Raises :class:`ModelError` naming ``store`` when the
+    scene does not pickle (e.g. a load given as a lambda)."""
+    try:
+        blob = pickle.dumps(scene, protocol=4)
+    except Exception as err:  # pickling raises several types (PicklingError, AttributeError)
+        raise ModelError("store", "the scene cannot be fingerprinted for a resumable store "
+                         f"({type(err).__name__}: {err}); give its loads as constants, "
+                         "Series or module-level functions, or run without a store") from None
+    return hashlib.sha256(blob).hexdigest()
+
+
+class _Store:
+    """The rungs of one ladder on disk (layout in the module docstring)."""
+
+    def __init__(self, directory, ident: dict):
+        self.dir = Path(directory)
+        self.dir.mkdir(parents=True, exist_ok=True)
+        meta = self.dir / "auto_store.json"
+        if meta.exists():
+            old = json.loads(meta.read_text())
+            for key, val in ident.items():
+                if old.get(key) != val:
+                    raise ModelError("store", f"= {str(directory)!r} holds the ladder of a "
+                                     f"different {key.replace('_', ' ')} ({old.get(key)!r}, "
+                                     f"not {val!r}): use a new store or delete it")
+        else:
+            self._write(meta, ident)
+
+    @staticmethod
+    def _write(path: Path, data: dict) -> None:
+        tmp = path.with_name(f".{path.stem}-{uuid.uuid4().hex[:8]}.json")
+        tmp.write_text(json.dumps(data, indent=1))
+        os.replace(tmp, path)  # whole file or none: a killed run leaves no partial rung
+
+    def load(self, level: int, settings: dict) -> dict | None:
+        p = self.dir / f"rung{level}.json"
+        if not p.exists():
+            return None
+        d = json.loads(p.read_text())
+        if any(not math.isclose(d["settings"].get(k, math.nan), v, rel_tol=1e-12)
+               for k, v in settings.items()):
+            return None  # another ladder's rung (coarsest changed): run it again
+        return d
+
+    def save(self, level: int, settings: dict, cpu: float, summary: dict) -> None:
+        clean = {k: (float(v) if isinstance(v, (int, float, np.floating, np.integer))
+                     else None) for k, v in summary.items()}
+        self._write(self.dir / f"rung{level}.json",
+                    {"settings": settings, "cpu_s": cpu, "summary": clean})
+
+
 def _rung_scene(scene, settings: dict):
     sc = copy.copy(scene)
     sc.method = "exact"
@@ -126,7 +190,8 @@ class FidelityChoice:
     result : the chosen rung's result (``None`` if not ``met``).
     table : one row per rung run: ``rung``, ``dt``, [``refreeze_deg``], ``cpu_s``,
         ``n_events``, the quantities, ``diff_next`` = d(l, l + 1) and ``diff_next2`` =
-        d(l, l + 2) of (A1) (NaN where that rung was not run), ``chosen``.
+        d(l, l + 2) of (A1) (NaN where that rung was not run), ``chosen``, ``cached``
+        (loaded from the store, not run).
     tol : the tolerance asked for.
     results : every rung's result, in rung order (only with ``keep_all=True``).
     """
@@ -181,7 +246,8 @@ class FidelityChoice:
 
 
 def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: int = LEVELS,
-           quantities=QUANTITIES, progress=None, keep_all: bool = False) -> FidelityChoice:
+           quantities=QUANTITIES, progress=None, keep_all: bool = False,
+           store=None) -> FidelityChoice:
     """Run the step ladder of ``scene`` from ``coarsest`` times its settings and choose the
     cheapest rung converged to ``tol`` by rule (A2) of :mod:`gearmodal.auto`.
 
@@ -195,7 +261,10 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     quantities : keys of :func:`gearmodal.studies.summarize` compared.
     progress : ``progress(rung, settings, row)`` after each rung (CLI, studies).
     keep_all : keep every rung's result in ``choice.results`` (memory: a turbine run each);
-        by default only the chosen one is kept.
+        by default only the chosen one is kept. Rungs loaded from ``store`` have ``None``.
+    store : directory; each rung is written there as it finishes and a ladder started again
+        with the same scene and store resumes (module docstring, "Resume"). The table's
+        ``cached`` column says which rungs were loaded.
     """
     from .studies import summarize
 
@@ -206,21 +275,31 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     if not isinstance(levels, int) or isinstance(levels, bool) or not 3 <= levels <= 12:
         raise ModelError("levels", f"= {levels!r}: must be an integer from 3 to 12")
     base = _settings(scene)
+    disk = None if store is None else _Store(store, {"scene_sha256": fingerprint(scene),
+                                                      "coarsest": float(coarsest)})
     rows, results, summaries = [], [], []
     chosen = None
     for level in range(levels):
         f = coarsest / 2.0**level
         st = _rung_settings(scene, base, f)
-        t0 = time.process_time()
-        res = _rung_scene(scene, st).simulate()
-        cpu = time.process_time() - t0
-        summ = summarize(res)
+        got = None if disk is None else disk.load(level, st)
+        if got is not None:
+            res, cpu = None, float(got["cpu_s"])
+            summ = {k: (math.nan if v is None else v) for k, v in got["summary"].items()}
+        else:
+            t0 = time.process_time()
+            res = _rung_scene(scene, st).simulate()
+            cpu = time.process_time() - t0
+            summ = summarize(res)
+            if disk is not None:
+                disk.save(level, st, cpu, summ)
         results.append(res)
         summaries.append(summ)
         if not keep_all and level >= 3:
             results[level - 3] = None  # only the last three rungs can still be chosen
         rows.append({"rung": level, **st, "cpu_s": cpu, "n_events": summ.get("n_events"),
-                     **{q: summ.get(q, math.nan) for q in quantities}})
+                     **{q: summ.get(q, math.nan) for q in quantities},
+                     "cached": got is not None})
         if progress is not None:
             progress(level, st, rows[-1])
         if level >= 2:
@@ -240,6 +319,10 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     settings = {k: v for k, v in rows[chosen].items() if k in base} if chosen is not None \
         else {}
     result = results[chosen] if chosen is not None else None
+    if chosen is not None and result is None:  # loaded from the store: run it again
+        result = _rung_scene(scene, settings).simulate()
+        if keep_all:
+            results[chosen] = result
     return FidelityChoice(met=chosen is not None, rung=chosen, settings=settings,
                           result=result, table=table, tol=float(tol),
                           quantities=tuple(quantities), results=results if keep_all else [])

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -117,8 +118,10 @@ def cmd_simulate(args) -> int:
 
         with tqdm(desc=f"auto, tolerance {scene.tolerance:g}: rungs", unit="rung",
                   disable=args.quiet) as bar:
-            res = chosen_result(choose(scene, scene.tolerance,
-                                       progress=lambda *_: bar.update(1)), "scene.tolerance")
+            # rungs stored as they finish: the same command again resumes the ladder
+            res = chosen_result(choose(scene, scene.tolerance, store=Path(args.out) /
+                                       "auto_rungs", progress=lambda *_: bar.update(1)),
+                                "scene.tolerance")
     elif scene.turbine is not None:
         with tqdm(total=int(round(scene.t_end / scene.drivetrain.get("aero_dt", 0.02))),
                   desc="turbine + gearbox", unit="step", disable=args.quiet) as bar:

@@ -127,17 +127,29 @@ def _check_keys(table: str, spec: dict, allowed, required=()) -> None:
             raise ModelError(f"{table}.{key}", "missing")
 
 
+@dataclass(frozen=True)
+class Wave:
+    """A load ``mean + amplitude sin(2 pi frequency_hz t + phase)`` (N or N m; ``phase`` in
+    rad), callable of time in s. A plain object, so a scene with waves pickles (sweeps on a
+    process pool, the fingerprint of :func:`gearmodal.auto.choose`'s store)."""
+
+    mean: float
+    amplitude: float
+    frequency_hz: float
+    phase: float
+
+    def __call__(self, t):
+        return self.mean + self.amplitude * math.sin(2 * math.pi * self.frequency_hz * t
+                                                     + self.phase)
+
+
 def _wave(field_: str, spec: dict):
     _check_keys(field_, spec, _WAVE)
     mean = v.number(f"{field_}.mean", spec.get("mean", 0.0), "N or N m")
     amp = v.number(f"{field_}.amplitude", spec.get("amplitude", 0.0), "N or N m")
     f = v.nonnegative(f"{field_}.frequency_hz", spec.get("frequency_hz", 0.0), "Hz")
     ph = math.radians(v.number(f"{field_}.phase_deg", spec.get("phase_deg", 0.0), "deg"))
-
-    def load(t, mean=mean, amp=amp, f=f, ph=ph):
-        return mean + amp * math.sin(2 * math.pi * f * t + ph)
-
-    return load, mean
+    return Wave(mean, amp, f, ph), mean
 
 
 def load_scene(path, overrides: dict | None = None) -> Scene:

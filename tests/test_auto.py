@@ -123,3 +123,36 @@ def test_difference_is_symmetric_about_zero():
     b["double_contact_time_s"] = 0.0
     b["max_front_force_N"] = 1.1
     assert difference(a, b) == pytest.approx(0.1 / 1.1)
+
+
+def test_auto_store_resumes_an_interrupted_ladder(tmp_path):
+    """A ladder stopped after two rungs resumes from its store: the finished rungs are loaded
+    (``cached``), the rest run, and the table and the chosen result equal an uninterrupted
+    ladder's to the last bit (the runs are deterministic). A rerun loads every rung and runs
+    only the chosen one again; another scene is refused."""
+    sc = load_scene(SCENE)
+    sc.t_end = 0.1
+    plain = gm.choose_fidelity(sc, 0.05)
+    store = tmp_path / "rungs"
+
+    def stop_after_two(level, st, row):
+        if level == 1:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        gm.choose_fidelity(sc, 0.05, store=store, progress=stop_after_two)
+    assert sorted(p.name for p in store.glob("rung*.json")) == ["rung0.json", "rung1.json"]
+    ran = []
+    resumed = gm.choose_fidelity(sc, 0.05, store=store,
+                                 progress=lambda lv, st, row: ran.append(lv))
+    assert list(resumed.table.cached) == [lv < 2 for lv in range(len(resumed.table))]
+    assert ran == list(range(len(resumed.table)))  # progress reports loaded rungs too
+    cols = ["rung", "dt", *QUANTITIES, "diff_next", "diff_next2", "chosen"]
+    assert resumed.table[cols].equals(plain.table[cols])
+    assert resumed.result.forces.equals(plain.result.forces)
+    again = gm.choose_fidelity(sc, 0.05, store=store)
+    assert again.table.cached.all() and again.rung == plain.rung
+    assert again.result.forces.equals(plain.result.forces)  # the chosen rung, run again
+    other = load_scene(SCENE, CASES["reference"])
+    with pytest.raises(ModelError, match="^store.*different scene sha256"):
+        gm.choose_fidelity(other, 0.05, store=store)

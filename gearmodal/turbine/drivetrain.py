@@ -148,15 +148,46 @@ def _accelerating_equilibrium(asm, r: np.ndarray, speed_rpm: float, loads: dict)
     return q - r * float(Mr @ q) / float(r @ Mr)
 
 
+def unrestrained(asm, modes: np.ndarray, share: float = 0.1) -> list[str]:
+    """Names of the DOFs that move most in the free ``modes`` (mass-orthonormal columns) once
+    the drivetrain rotation (the combination that moves ``rotor.theta`` most) is taken out,
+    largest first, for an error message. Translations and tilts are named before rotations
+    about the wheel axes: an unsupported tilt of a helical wheel lets the chain behind it turn,
+    and the tilt is the cause. A DOF is named when its kinetic-energy share is at least
+    ``share`` of the largest one's."""
+    if "rotor.theta" in asm.dof_names:
+        a = modes[asm.dof_names.index("rotor.theta")]
+        if np.any(a):  # an orthonormal basis of the combinations that leave the rotor still
+            modes = modes @ sla.null_space(a[None, :])
+    s = np.sqrt(np.abs(np.diag(asm.M)))[:, None] * modes
+    e = np.sum(s * s, axis=1)
+    lateral = np.array([n.rsplit(".", 1)[-1] in ("x", "y", "z", "rx", "ry")
+                        for n in asm.dof_names])
+    if e[lateral].sum() > 1e-6 * e.sum():
+        e = np.where(lateral, e, 0.0)
+    order = np.argsort(-e)
+    return [asm.dof_names[i] for i in order if e[i] > 0 and e[i] >= share * e[order[0]]]
+
+
 def rigid_rotation(asm) -> np.ndarray:
     """The free rotation mode ``r`` of the drivetrain (every wheel turning at its speed ratio),
     normalised to 1 on the rotor; raises when the gearbox has no such mode."""
     c = asm.contacts
     Kc = asm.K + (c.W.T * c.stiffness) @ c.W  # all flanks closed: the stiffest connection
     w, V = sla.eigh(Kc, asm.M)
-    if not (len(w) > 1 and abs(w[0]) <= 1e-8 * abs(w[1])):
+    # zero modes sit at rounding level (~1e-16 of the largest eigenvalue); a physical mode
+    # 1e-10 below the stiffest one would be below 0.05 Hz against a 5 kHz top frequency
+    free = np.abs(w) <= 1e-10 * np.abs(w).max()
+    if not free.any():
         raise ModelError("gearbox", "has no free drivetrain rotation: the rotor and generator "
                          "must be free to turn (no torsional support to ground)")
+    if free.sum() > 1:
+        raise ModelError("gearbox", f"has {int(free.sum())} free motions where only the "
+                         "drivetrain rotation may be free: nothing resists "
+                         + ", ".join(unrestrained(asm, V[:, free])) + ". Give those "
+                         "supports a stiffness in these directions (a support given as a "
+                         "number has x, y and, at the full level, z; tilts rx/ry need a "
+                         "stiffness table)")
     r = V[:, 0]
     i = asm.dof_names.index("rotor.theta")
     return r / r[i]
