@@ -38,9 +38,11 @@ DOF level) is the scene's choice.
 Resume: with ``store=DIR`` every rung's settings, CPU time and summary are written to
 ``DIR/rung<l>.json`` as it finishes (atomically), under the scene's fingerprint (SHA-256 of
 the pickled scene, ``DIR/auto_store.json``). Started again on the same scene and store, the
-ladder loads the finished rungs and runs only the others; a different scene is refused. The
-store keeps summaries, not time series: when the chosen rung was loaded, it is run once more
-to return its result (the runs are deterministic, so that result is the stored rung's).
+ladder loads the finished rungs and runs only the others; a different scene (or a different
+``coarsest``) is refused. The store keeps summaries, not time series: when the chosen rung was
+loaded, it is run once more to return its result (the runs are deterministic, so that result
+is the stored rung's; a re-run whose quantities differ from the stored ones, e.g. after an
+upgrade changed the integrator, raises naming ``store``).
 """
 
 from __future__ import annotations
@@ -111,11 +113,16 @@ def _rung_settings(scene, base: dict, f: float) -> dict:
 
 
 def fingerprint(scene) -> str:
-    """SHA-256 of the pickled scene (model, loads, turbine, wind, settings): what a
-    :func:`choose` store is keyed by. Raises :class:`ModelError` naming ``store`` when the
-    scene does not pickle (e.g. a load given as a lambda)."""
+    """SHA-256 of the pickled scene (model, loads, turbine, wind, settings) without what does
+    not change a rung's run (the file path it was loaded from, ``method``, ``tolerance``):
+    what a :func:`choose` store is keyed by. Raises :class:`ModelError` naming ``store`` when
+    the scene does not pickle (e.g. a load given as a lambda)."""
+    sc = copy.copy(scene)
+    for attr, neutral in (("source", ""), ("method", "exact"), ("tolerance", 0.0)):
+        if hasattr(sc, attr):
+            setattr(sc, attr, neutral)
     try:
-        blob = pickle.dumps(scene, protocol=4)
+        blob = pickle.dumps(sc, protocol=4)
     except Exception as err:  # pickling raises several types (PicklingError, AttributeError)
         raise ModelError("store", "the scene cannot be fingerprinted for a resumable store "
                          f"({type(err).__name__}: {err}); give its loads as constants, "
@@ -286,6 +293,8 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
         if got is not None:
             res, cpu = None, float(got["cpu_s"])
             summ = {k: (math.nan if v is None else v) for k, v in got["summary"].items()}
+            if isinstance(summ.get("n_events"), float) and summ["n_events"].is_integer():
+                summ["n_events"] = int(summ["n_events"])
         else:
             t0 = time.process_time()
             res = _rung_scene(scene, st).simulate()
@@ -321,6 +330,11 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     result = results[chosen] if chosen is not None else None
     if chosen is not None and result is None:  # loaded from the store: run it again
         result = _rung_scene(scene, settings).simulate()
+        again = summarize(result)
+        if difference(again, summaries[chosen], quantities) > 1e-12:
+            raise ModelError("store", f"= {str(store)!r}: rung {chosen} run again differs "
+                             "from its stored summary (made by another gearmodal version?): "
+                             "delete the store")
         if keep_all:
             results[chosen] = result
     return FidelityChoice(met=chosen is not None, rung=chosen, settings=settings,

@@ -114,14 +114,15 @@ def cmd_simulate(args) -> int:
     from tqdm import tqdm
 
     if scene.method == "auto":  # the step ladder, one bar step per rung (gearmodal.auto)
-        from .auto import choose, chosen_result
+        from .auto import choose, chosen_result, fingerprint
 
         with tqdm(desc=f"auto, tolerance {scene.tolerance:g}: rungs", unit="rung",
                   disable=args.quiet) as bar:
-            # rungs stored as they finish: the same command again resumes the ladder
-            res = chosen_result(choose(scene, scene.tolerance, store=Path(args.out) /
-                                       "auto_rungs", progress=lambda *_: bar.update(1)),
-                                "scene.tolerance")
+            # rungs stored as they finish, by the scene's fingerprint: the same command again
+            # resumes the ladder, another scene (or --t-end) into the same OUT starts its own
+            store = Path(args.out) / "auto_rungs" / fingerprint(scene)[:16]
+            res = chosen_result(choose(scene, scene.tolerance, store=store,
+                                       progress=lambda *_: bar.update(1)), "scene.tolerance")
     elif scene.turbine is not None:
         with tqdm(total=int(round(scene.t_end / scene.drivetrain.get("aero_dt", 0.02))),
                   desc="turbine + gearbox", unit="step", disable=args.quiet) as bar:
@@ -148,7 +149,10 @@ def cmd_simulate(args) -> int:
         fig.savefig(out / "auto.png", dpi=130)
         plt.close(fig)
         st = auto.settings
-        print(f"auto: rung {auto.rung} of {len(auto.table)} run, dt {st['dt']:.6g} s"
+        loaded = int(auto.table["cached"].sum()) if "cached" in auto.table else 0
+        print(f"auto: rung {auto.rung} of {len(auto.table)}"
+              + (f" ({loaded} loaded from the store)" if loaded else "")
+              + f", dt {st['dt']:.6g} s"
               + (f", refreeze {st['refreeze_deg']:.6g} deg" if "refreeze_deg" in st else "")
               + f" (within {auto.tol:g} of the next two finer rungs); wrote {out}/auto.csv")
     fig = sim.plot()

@@ -156,3 +156,22 @@ def test_auto_store_resumes_an_interrupted_ladder(tmp_path):
     other = load_scene(SCENE, CASES["reference"])
     with pytest.raises(ModelError, match="^store.*different scene sha256"):
         gm.choose_fidelity(other, 0.05, store=store)
+
+
+def test_fingerprint_ignores_the_path_the_method_and_a_finished_run():
+    """The store's key is the scene's content: a relative and an absolute path, ``method`` and
+    ``tolerance`` do not change it, nor do the caches a turbine run fills (the turbulence box,
+    the rotor's induction warm start); the model does."""
+    from gearmodal.auto import fingerprint
+
+    turbine = "studies/scenes/600kw_turbine_10ms.toml"
+    sc = load_scene(turbine, {"scene.t_end": 0.04})
+    before = fingerprint(sc)
+    assert fingerprint(load_scene(str(Path(turbine).resolve()), {"scene.t_end": 0.04})) \
+        == before
+    sc.simulate()
+    assert fingerprint(sc) == before
+    sc.method, sc.tolerance = "auto", 0.01
+    assert fingerprint(sc) == before
+    assert fingerprint(load_scene(turbine, {"scene.t_end": 0.04,
+                                            "model.stages.0.backlash": 2e-4})) != before

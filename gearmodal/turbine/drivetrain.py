@@ -188,8 +188,11 @@ def rigid_rotation(asm) -> np.ndarray:
                          "supports a stiffness in these directions (a support given as a "
                          "number has x, y and, at the full level, z; tilts rx/ry need a "
                          "stiffness table)")
-    r = V[:, 0]
+    r = V[:, int(np.flatnonzero(free)[0])]
     i = asm.dof_names.index("rotor.theta")
+    if asm.M[i, i] * r[i] ** 2 < 1e-6:  # r is mass-normalised: the rotor's energy share
+        raise ModelError("gearbox", "has one free motion, but it leaves the rotor still: "
+                         "nothing resists " + ", ".join(unrestrained(asm, r[:, None])))
     return r / r[i]
 
 

@@ -76,6 +76,12 @@ class Rotor:
         self._a = np.zeros((self.blades, n))
         self._ap = np.zeros((self.blades, n))
 
+    def __getstate__(self):
+        """Pickle without the induction factors of the last call (a warm start that every run
+        resets), so that a pickled (or fingerprinted) rotor is the same before and after a
+        run."""
+        return {**self.__dict__, "_a": np.zeros_like(self._a), "_ap": np.zeros_like(self._ap)}
+
     def positions(self, psi: float):
         """Element positions ``(y, z)`` relative to the hub, each (blades, n), and the
         blade azimuths."""

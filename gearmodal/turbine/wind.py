@@ -69,6 +69,11 @@ class Wind:
             raise ModelError("wind.grid_points", f"= {self.grid_points!r}: at least 2")
         self._box = None
 
+    def __getstate__(self):
+        """Pickle without the turbulence box: a cache rebuilt from the seed on first use, so
+        that a pickled (or fingerprinted) wind is the same before and after a run."""
+        return {**self.__dict__, "_box": None}
+
     # -- turbulence box ------------------------------------------------------------------
     def _turbulence(self):
         """(times, y, z, box[time, comp, iy, iz]) of the turbulent fluctuations."""
