@@ -160,7 +160,7 @@ class _Store:
         d = json.loads(p.read_text())
         if any(not math.isclose(d["settings"].get(k, math.nan), v, rel_tol=1e-12)
                for k, v in settings.items()):
-            return None  # another ladder's rung (coarsest changed): run it again
+            return None  # a guard (scene and coarsest, in the identity, pin them): rerun
         return d
 
     def save(self, level: int, settings: dict, cpu: float, summary: dict) -> None:

@@ -645,8 +645,8 @@ class TaylorIntegrator:
         else:
             self.rho = max(spectral_bound_all(system), 1e-300)
             system.rho_bound = self.rho
-        self.n_terms = int(n_terms) if n_terms else terms_for(reach)
         self.terms = np.array(_term_table(float(reach), int(n_terms or 0)), dtype=np.int64)
+        self.n_terms = int(self.terms[-1])  # the full count, last in the table
         self.tscale = TERM_BINS * self.rho / reach
         self.h_max = min(reach / self.rho, self.dt)
         self.MinvU = np.ascontiguousarray(system.MinvU)
