@@ -57,6 +57,10 @@ def candidate(ga, ra, gb, rb, L, margin):
     scale = abs(ra * L) + abs(rb * L)
     if scale == 0.0:
         return False
+    # the interpolant's Bernstein control points (ga, ga + ra L / 3, gb - rb L / 3, gb) bound
+    # it from above (convex hull): most gaps are cleared by them without the extremum's root
+    if max(ga, gb, ga + ra * L / 3.0, gb - rb * L / 3.0) <= -margin * scale:
+        return False
     return hermite_max(ga, ra, gb, rb, L) > -margin * scale
 
 

@@ -37,7 +37,7 @@ import numba
 import numpy as np
 
 from ..errors import ModelError
-from .kernels import GRAZE_MARGIN, SIMULTANEOUS, _bisect_up, _dpoly, candidate
+from .kernels import GRAZE_MARGIN, SIMULTANEOUS, _bisect_up, candidate
 from .kernels import _poly as _hpoly
 
 #: rho * (piece length) at most this: every modal component turns by at most 2 rad per piece
@@ -211,11 +211,34 @@ def _gaps(wptr, widx, wval, off, s, q, v, g, r):
         r[e] = sg * rr
 
 
-@numba.njit(cache=True)
+#: Pascal's triangle ``PASCAL[i, k] = C(i, k)`` and ``INV_BINOM[d, k] = 1 / C(d, k)`` up to
+#: degree ``TABLE_DEGREE`` (a full-reach piece has degree 23), frozen into the compiled
+#: kernels as constants: the basis change of :func:`_bernstein` as vectorised sums
+TABLE_DEGREE = 40
+PASCAL = np.zeros((TABLE_DEGREE + 1, TABLE_DEGREE + 1))
+for _i in range(TABLE_DEGREE + 1):
+    for _k in range(_i + 1):
+        PASCAL[_i, _k] = math.comb(_i, _k)
+INV_BINOM = np.where(PASCAL > 0, 1.0 / np.where(PASCAL > 0, PASCAL, 1.0), 0.0)
+
+
+@numba.njit(cache=True, fastmath=FAST)
 def _bernstein(c, b):
-    """Bernstein coefficients on [0, 1] of ``sum c_k tau^k``: ``b_i = sum_k C(i, k) / C(d, k)
-    c_k``, by repeated summation (O(d^2))."""
+    """Bernstein coefficients on [0, 1] of ``sum c_k tau^k``: ``b_i = sum_(k <= i) C(i, k) /
+    C(d, k) c_k`` (the monomial-to-Bernstein basis change) as vectorised dot products over
+    the tabulated binomials, last row first so that ``b`` can hold the scaled ``c`` (3x
+    faster than repeated summation, a chain of dependent additions, which is kept beyond
+    ``TABLE_DEGREE``)."""
     d = c.shape[0] - 1
+    if d <= TABLE_DEGREE:
+        for k in range(d + 1):
+            b[k] = c[k] * INV_BINOM[d, k]
+        for i in range(d, -1, -1):
+            acc = 0.0
+            for k in range(i + 1):
+                acc += PASCAL[i, k] * b[k]
+            b[i] = acc
+        return
     binom = 1.0
     for k in range(d + 1):
         b[k] = c[k] / binom
@@ -239,26 +262,45 @@ def _split(b, left, right, w):
         right[d - r] = w[d - r]
 
 
+@numba.njit(cache=True, fastmath=FAST)
+def _max(b):
+    """Largest entry (a vectorised maximum)."""
+    mx = b[0]
+    for i in range(1, b.shape[0]):
+        mx = max(mx, b[i])
+    return mx
+
+
 @numba.njit(cache=True)
-def _refine(coef, lo, hi):
-    """The crossing of ``g`` inside [lo, hi] (g(lo) <= 0 < g(hi), one root): Newton's method
-    kept inside the bracket (bisection when a step leaves it), the bracket closed around the
-    converged point, then bisection to adjacent floating-point numbers; returns the upper end
-    (g > 0)."""
-    glo = _hpoly(coef, lo)
-    ghi = _hpoly(coef, hi)
+def _value_slope(coef, t):
+    """``g(t)`` and ``g'(t)`` by one Horner pass (two independent chains: about the latency
+    of one)."""
+    m = coef.shape[0]
+    g = coef[m - 1]
+    dg = 0.0
+    for k in range(m - 2, -1, -1):
+        dg = dg * t + g
+        g = g * t + coef[k]
+    return g, dg
+
+
+@numba.njit(cache=True)
+def _refine(coef, lo, hi, glo, ghi):
+    """The crossing of ``g`` inside [lo, hi] (``glo = g(lo) <= 0 < ghi = g(hi)``, one root):
+    Newton's method kept inside the bracket (bisection when a step leaves it), the bracket
+    closed around the converged point, then bisection to adjacent floating-point numbers;
+    returns the upper end (g > 0)."""
     x = (lo * ghi - hi * glo) / (ghi - glo) if ghi > glo else 0.5 * (lo + hi)
     if not (lo < x < hi):
         x = 0.5 * (lo + hi)
     for _ in range(40):
-        gx = _hpoly(coef, x)
+        gx, dx = _value_slope(coef, x)
         if gx > 0.0:
             hi = x
         else:
             lo = x
         if hi - lo <= 4.0 * np.spacing(hi):
             break
-        dx = _dpoly(coef, x)
         xn = x - gx / dx if dx != 0.0 else 0.5 * (lo + hi)
         if gx == 0.0 or abs(xn - x) <= 4.0 * np.spacing(x):
             # converged: close the bracket a few units in the last place either side
@@ -306,41 +348,41 @@ def first_root(coef, work, stk):
     c = work[depth_max + 1]
     left = work[depth_max + 2]
     right = work[depth_max + 3]
-    b = work[depth_max + 4]
-    c[:] = coef
     if g0 >= 0.0:
+        c[:] = coef
         c[0] = 0.0
         for k in range(1, d + 1):
             if c[k] != 0.0:
                 if c[k] > 0.0:
                     return 0.0
                 break
-    _bernstein(c, work[0])
+        _bernstein(c, work[0])
+    else:
+        _bernstein(coef, work[0])
     stk[0, 0] = 0.0
     stk[1, 0] = 1.0
     top = 1
     while top > 0:
         top -= 1
         a = stk[0, top]
-        b[:] = work[top]
+        b = work[top]  # (read by _split before its row is overwritten)
         w = stk[1, top]
-        mx = b[0]
+        if _max(b) <= 0.0:
+            continue  # the usual outcome for a flagged near miss: no crossing, no split
+        if b[0] > 0.0:
+            return a  # the left neighbours hold no crossing
         changes = 0
         prev = b[0]
         for i in range(1, d + 1):
-            mx = max(mx, b[i])
             if b[i] != 0.0:
                 if prev != 0.0 and (b[i] > 0.0) != (prev > 0.0):
                     changes += 1
                 prev = b[i]
-        if mx <= 0.0:
-            continue
-        if b[0] > 0.0:
-            return a  # the left neighbours hold no crossing
         if changes == 1 and b[d] > 0.0:
             hi = a + w
-            if _hpoly(coef, hi) > 0.0:
-                return _refine(coef, a, hi)
+            ghi = _hpoly(coef, hi)
+            if ghi > 0.0:
+                return _refine(coef, a, hi, _hpoly(coef, a), ghi)
         if top + 2 > depth_max or w < MIN_WIDTH:
             # below the resolution of time (or out of stack): a crossing at the right end if
             # the polynomial ends positive there, else none in this interval
