@@ -339,7 +339,7 @@ class _Tables:
         self.seg_systems, self.t, self.X, self.S, self.ev = seg_systems, t, X, S, events
         self.mesh_k = mesh_k
         self.system = seg_systems[0][2]
-        self.index = pd.Index(t, name="time")
+        self._index = None
         self.force_arrays = None
         if len(seg_systems) > 1:
             # a refrozen run: its segments' systems (thousands on the turbine) are not kept
@@ -349,6 +349,13 @@ class _Tables:
 
     def __call__(self, name: str) -> pd.DataFrame:
         return getattr(self, name)()
+
+    @property
+    def index(self) -> pd.Index:
+        """The tables' time index (built with the first table: a run need not pay for it)."""
+        if self._index is None:
+            self._index = pd.Index(self.t, name="time")
+        return self._index
 
     def q(self) -> pd.DataFrame:
         sy = self.system

@@ -54,8 +54,10 @@ class PiecewiseLinearSystem:
             L = np.linalg.cholesky(asm.M)
         except np.linalg.LinAlgError:
             raise ModelError("mass", "the mass matrix is not positive definite") from None
-        self.Minv = sla.cho_solve((L, True), np.eye(n))
-        self.Linv = sla.solve_triangular(L, np.eye(n), lower=True)  # M^-1 = Linv^T Linv
+        # M = L L^T, M^-1 = Linv^T Linv (numpy's inverse of the small triangular factor: the
+        # scipy wrappers' checks cost more than the solves at these sizes)
+        self.Linv = np.linalg.inv(L)
+        self.Minv = self.Linv.T @ self.Linv
         self.K0 = asm.K + om**2 * asm.K_cent
         self.C0 = asm.C + om * asm.G
         self.f_const = om**2 * asm.f_cent

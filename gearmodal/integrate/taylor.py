@@ -547,12 +547,18 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 e = order[o]
                 limit = min(best + simultaneous / h, 1.0)
                 sg = -1.0 if s[e] else 1.0
-                scale = 1.0
+                # the gap's series, scaled to [0, limit]: nonzero by nonzero of the gap row
+                # (independent sums over the terms; -5 % of the run against term by term)
                 for kk in range(nt):
-                    a = 0.0
-                    for jj in range(wptr[e], wptr[e + 1]):
-                        a += wval[jj] * Bv[kk, widx[jj]]
-                    coef[kk] = sg * a * scale
+                    coef[kk] = 0.0
+                for jj in range(wptr[e], wptr[e + 1]):
+                    col = widx[jj]
+                    wv = wval[jj]
+                    for kk in range(nt):
+                        coef[kk] += wv * Bv[kk, col]
+                scale = sg
+                for kk in range(nt):
+                    coef[kk] *= scale
                     scale *= limit
                 coef[0] -= sg * off[e]
                 r = first_root(coef[:nt], work[:, :nt], stk)
@@ -643,6 +649,11 @@ def spectral_bound_all(system) -> float:
 
     def norm_bound(H0, per_contact):
         """Bound of |L^-1 H_s L^-T| over every state (H0 always active)."""
+        if not np.any(H0) and np.all(per_contact >= 0.0):
+            # no always-active part (e.g. damping only at the contacts): every state lies
+            # between 0 and all contacts closed, one eigenproblem
+            hi = (Wl.T * per_contact) @ Wl
+            return float(max(np.linalg.eigvalsh(hi)[-1], 0.0))
         A0 = Li @ H0 @ Li.T
         if np.abs(H0 - H0.T).max(initial=0.0) <= 1e-12 * np.abs(H0).max(initial=1e-300):
             # L^-1 (H0 + W^T D W) L^-T = A0 + Wl^T D Wl (D: the negative or positive part)
@@ -672,11 +683,11 @@ class TaylorIntegrator:
         self.MC0 = np.ascontiguousarray(Minv @ system.C0)
         self.U = np.ascontiguousarray(system.W @ Minv.T)  # rows M^-1 w_e (Minv symmetric)
         # the gap rows by their nonzeros (a mesh or bearing touches a few DOFs)
-        nz = [np.flatnonzero(w) for w in system.W]
-        self.wptr = np.concatenate([[0], np.cumsum([len(i) for i in nz])]).astype(np.int64)
-        self.widx = np.concatenate(nz + [np.empty(0, np.int64)]).astype(np.int64)
-        self.wval = np.ascontiguousarray(system.W[np.repeat(np.arange(len(nz)),
-                                                            [len(i) for i in nz]), self.widx])
+        rows, cols = np.nonzero(system.W)  # row-major: each row's columns in order
+        self.wptr = np.zeros(system.W.shape[0] + 1, dtype=np.int64)
+        np.cumsum(np.bincount(rows, minlength=system.W.shape[0]), out=self.wptr[1:])
+        self.widx = cols.astype(np.int64)
+        self.wval = np.ascontiguousarray(system.W[rows, cols])
         base = getattr(system, "rho_base", None)
         if base:
             # a refrozen segment of the same system (the geometry turned) passes its
