@@ -438,7 +438,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     gb = np.empty(nc)
     rb = np.empty(nc)
     coef = np.empty(n_terms)
-    work = np.empty((DEPTH + 5, n_terms))
+    work_flat = np.empty((DEPTH + 5) * n_terms)
     stk = np.empty((2, DEPTH + 1))
     ysc = np.empty(2 * n)
     roots = np.empty(nc)
@@ -503,6 +503,9 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             j = int(math.ceil(h * tscale))
             nt = terms[min(max(j, 0), terms.shape[0] - 1)]
             Bv = B[:nt]
+            # the root search's scratch, contiguous at this width (a column slice of a wider
+            # array would not vectorise)
+            work = work_flat[:(DEPTH + 5) * nt].reshape((DEPTH + 5, nt))
             for i in range(n):
                 g0[i] = acc[i] + gF[i] + gS[i] * (t - tk)
             _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
@@ -561,7 +564,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     coef[kk] *= scale
                     scale *= limit
                 coef[0] -= sg * off[e]
-                r = first_root(coef[:nt], work[:, :nt], stk)
+                r = first_root(coef[:nt], work, stk)
                 counts[2] += 1
                 if r < np.inf:
                     roots[e] = r * limit
