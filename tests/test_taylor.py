@@ -4,6 +4,7 @@ exponential propagator."""
 
 import math
 import sys
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -11,12 +12,15 @@ import pytest
 
 import gearmodal as gm
 from gearmodal.errors import ModelError
+from gearmodal.integrate.kernels import GRAZE_MARGIN, candidate, hermite_max
 from gearmodal.integrate.system import PiecewiseLinearSystem
 from gearmodal.integrate.taylor import (
     DEPTH,
     N_TERMS,
     REACH,
+    TABLE_DEGREE,
     TaylorIntegrator,
+    _bernstein,
     first_root,
     spectral_bound_all,
     terms_for,
@@ -75,6 +79,46 @@ def test_first_root_finds_a_graze_and_rejects_a_near_miss():
             assert math.isinf(r)
         else:
             assert r == pytest.approx(expect, abs=1e-11)
+
+
+@pytest.mark.parametrize("d", [0, 1, 5, 23, TABLE_DEGREE, TABLE_DEGREE + 1, 50])
+def test_bernstein_basis_change_matches_exact_rationals(d):
+    """The tabulated basis change (degree <= TABLE_DEGREE) and the repeated summation beyond
+    it against ``b_i = sum_(k <= i) C(i, k) / C(d, k) c_k`` in exact rational arithmetic:
+    within a rounding bound of 4 (d + 1) eps sum |c_k| (each b_i is a sum of at most d + 1
+    terms, each of magnitude <= |c_k|, since C(i, k) <= C(d, k))."""
+    rng = np.random.default_rng(d)
+    k = np.arange(d + 1)
+    for _ in range(20):
+        c = rng.standard_normal(d + 1) * 3.0**k / np.array([float(math.factorial(j))
+                                                              for j in k])
+        b = np.empty(d + 1)
+        _bernstein(c, b)
+        exact = [sum(Fraction(math.comb(i, j), math.comb(d, j)) * Fraction(float(c[j]))
+                     for j in range(i + 1)) for i in range(d + 1)]
+        err = max(abs(Fraction(float(b[i])) - exact[i]) for i in range(d + 1))
+        assert float(err) <= 4 * (d + 1) * np.finfo(float).eps * np.abs(c).sum()
+
+
+def test_candidate_control_point_bound_changes_no_decision():
+    """``candidate`` clears most gaps on the control points of the Hermite cubic before
+    computing its maximum; being an upper bound, it must give the decision of the maximum
+    itself on every input (200,000 random gaps, receding, rising and mixed)."""
+    rng = np.random.default_rng(7)
+    n = 200_000
+    ga = -np.abs(rng.standard_normal(n)) * 10.0 ** rng.uniform(-3, 1, n)
+    gb = -np.abs(rng.standard_normal(n)) * 10.0 ** rng.uniform(-3, 1, n)
+    ra = rng.standard_normal(n) * 10.0 ** rng.uniform(-3, 1, n)
+    rb = rng.standard_normal(n) * 10.0 ** rng.uniform(-3, 1, n)
+    L = 10.0 ** rng.uniform(-2, 0, n)
+    flagged = 0
+    for i in range(n):
+        scale = abs(ra[i] * L[i]) + abs(rb[i] * L[i])
+        expect = hermite_max(ga[i], ra[i], gb[i], rb[i], L[i]) > -GRAZE_MARGIN * scale
+        got = candidate(ga[i], ra[i], gb[i], rb[i], L[i], GRAZE_MARGIN)
+        assert got == expect, (ga[i], ra[i], gb[i], rb[i], L[i])
+        flagged += got
+    assert 0.05 * n < flagged < 0.95 * n  # both outcomes are exercised
 
 
 def test_spectral_bound_holds_for_every_contact_state():
