@@ -196,3 +196,17 @@ def test_first_root_ends_on_a_tangent_and_on_non_finite_input():
     r = root([-0.09, 0.6, -1.0])  # -(tau - 0.3)^2: touches zero, never positive
     assert math.isinf(r) or abs(r - 0.3) < 1e-7
     assert math.isinf(root([-1.0, 0.0, 0.0, math.inf, 0.0, -math.inf]))
+
+
+def test_first_root_near_overflow_and_scratch_width():
+    """Coefficients near the largest double: the Bernstein sums (up to (d + 1) max |c_k|)
+    would overflow to inf - inf and the subdivision run to its smallest width; scaled by a
+    power of two the search gives the unscaled polynomial's roots (review finding). Scratch of
+    another width than the polynomial is refused rather than read past it."""
+    for c in ([-1.0, 0.5, 1.0, -0.25], [-1.0, 3.0, -3.0], [-0.2, 1.7, -2.9, 1.6, 0.1]):
+        c = np.array(c)
+        big = c * (1.7e308 / np.abs(c).max())  # largest |c_k| 1.7e308: finite, the sums not
+        assert root(big) == pytest.approx(root(c), rel=1e-12)
+    with pytest.raises(ValueError, match="one column per coefficient"):
+        first_root(np.array([-1.0, 3.0, -3.0]), np.empty((DEPTH + 5, 8)),
+                   np.empty((2, DEPTH + 1)))

@@ -330,11 +330,15 @@ def first_root(coef, work, stk):
     and ``stk`` (2, depth + 1) are scratch.
     """
     d = coef.shape[0] - 1
+    if work.shape[1] != d + 1:  # (rows of another width would be read past the polynomial)
+        raise ValueError("first_root: work needs one column per coefficient")
+    big = 0.0
     for k in range(d + 1):
         if not np.isfinite(coef[k]):
             return np.inf  # a non-finite state: the caller reports it, no search can end
+        big = max(big, abs(coef[k]))
     g0 = coef[0]
-    if g0 > 0.0 and coef[1] > 0.0:
+    if g0 > 0.0 and (d == 0 or coef[1] > 0.0):
         return 0.0
     if g0 < 0.0:
         # g <= g0 + sum of the positive coefficients on [0, 1]: often enough
@@ -348,8 +352,17 @@ def first_root(coef, work, stk):
     c = work[depth_max + 1]
     left = work[depth_max + 2]
     right = work[depth_max + 3]
+    poly = coef
+    if big > 1e300:
+        # the basis change and Horner's sums reach (d + 1) max |c_k|: scaled by a power of two
+        # (the same roots, exactly) they cannot overflow into inf - inf (review finding: such
+        # intervals were split down to MIN_WIDTH)
+        poly = work[depth_max + 4]
+        f = math.ldexp(1.0, -math.frexp(big)[1])
+        for k in range(d + 1):
+            poly[k] = coef[k] * f
     if g0 >= 0.0:
-        c[:] = coef
+        c[:] = poly
         c[0] = 0.0
         for k in range(1, d + 1):
             if c[k] != 0.0:
@@ -358,7 +371,7 @@ def first_root(coef, work, stk):
                 break
         _bernstein(c, work[0])
     else:
-        _bernstein(coef, work[0])
+        _bernstein(poly, work[0])
     stk[0, 0] = 0.0
     stk[1, 0] = 1.0
     top = 1
@@ -380,9 +393,9 @@ def first_root(coef, work, stk):
                 prev = b[i]
         if changes == 1 and b[d] > 0.0:
             hi = a + w
-            ghi = _hpoly(coef, hi)
+            ghi = _hpoly(poly, hi)
             if ghi > 0.0:
-                return _refine(coef, a, hi, _hpoly(coef, a), ghi)
+                return _refine(poly, a, hi, _hpoly(poly, a), ghi)
         if top + 2 > depth_max or w < MIN_WIDTH:
             # below the resolution of time (or out of stack): a crossing at the right end if
             # the polynomial ends positive there, else none in this interval
