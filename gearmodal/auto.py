@@ -4,10 +4,11 @@ item 3).
 
 The rule
 --------
-Rung ``l = 0, 1, ...`` runs the scene with the exact method and its step ``dt`` (and, when the
-scene refreezes a turning geometry, its refreeze angle) multiplied by ``coarsest / 2^l``:
-rung 0 is ``coarsest`` times coarser than the scene, each next rung halves both (a turbine
-scene's ``dt`` snapped to the nearest whole fraction of its aerodynamic step). Of every rung
+Rung ``l = 0, 1, ...`` runs the scene with the exact method and its step ``dt`` multiplied by
+``coarsest / 2^l``: rung 0 is ``coarsest`` times coarser than the scene, each next rung halves
+it (a turbine scene's ``dt`` snapped to the nearest whole fraction of its aerodynamic step).
+The exact method finds every event whatever ``dt``; the step sets the output sampling of the
+peaks and, in a turbine scene, the load hold between aerodynamic steps. Of every rung
 the quantities engineers use are taken (:data:`QUANTITIES`, from
 :func:`gearmodal.studies.summarize`), and
 
@@ -20,10 +21,10 @@ that agrees within ``tol`` with each of the next two finer rungs**:
     l* = min { l : d(l, l + 1) <= tol  and  d(l, l + 2) <= tol }                      (A2)
 
 Rungs are run from the coarsest until (A2) holds or ``levels`` rungs have run. Two finer
-rungs, not one, because a single agreement can be chance where the coarse rungs drive spurious
-dynamics: on the paper's turbine scene a refreeze angle above a threshold kicks the carrier
-floating in its clearance into a rattle, the threshold moves from run to run, and a coarse
-pair can agree while both are wrong (``benchmarks/RESULTS.md``, "Fidelity ladder"). With the
+rungs, not one, because a single agreement can be chance where coarse rungs drive spurious
+dynamics (an earlier, refrozen geometry kicked the paper's carrier floating in its clearance
+into a rattle above a threshold angle that moved from run to run): a coarse pair can agree
+while both are wrong. With the
 converged quantities changing geometrically from rung to rung, (A2) bounds rung ``l*``'s
 distance from the finest rung run by ``tol``, and from the limit by about ``tol`` for any
 convergence faster than linear in the step.
@@ -89,16 +90,9 @@ def difference(a: dict, b: dict, quantities=QUANTITIES) -> float:
 
 
 def _settings(scene) -> dict:
-    """The scene's refinable settings: ``dt`` and, if it refreezes, ``refreeze_deg``."""
-    out = {"dt": float(scene.dt)}
-    if scene.turbine is not None:
-        out["refreeze_deg"] = float(scene.drivetrain.get("refreeze_deg", 1.0))
-    elif scene.speed_rpm > 0:
-        from .integrate import rotating_geometry
-
-        if rotating_geometry(scene.model):
-            out["refreeze_deg"] = float(scene.options.get("refreeze_deg", 2.0))
-    return out
+    """The scene's refinable settings: its step ``dt`` (the turning geometry is exact, so
+    there is no refreeze angle to refine)."""
+    return {"dt": float(scene.dt)}
 
 
 def _rung_settings(scene, base: dict, f: float) -> dict:
@@ -176,11 +170,6 @@ def _rung_scene(scene, settings: dict):
     sc.dt = settings["dt"]
     sc.drivetrain = dict(scene.drivetrain)
     sc.options = dict(scene.options)
-    if "refreeze_deg" in settings:
-        if scene.turbine is not None:
-            sc.drivetrain["refreeze_deg"] = settings["refreeze_deg"]
-        else:
-            sc.options["refreeze_deg"] = settings["refreeze_deg"]
     return sc
 
 
@@ -192,10 +181,10 @@ class FidelityChoice:
     ----------
     met : whether a rung satisfied the rule (A2).
     rung : index of the chosen rung in ``table`` (``None`` if not ``met``).
-    settings : the chosen rung's settings (``dt`` in s, ``refreeze_deg`` in deg if the scene
-        refreezes), to put in the scene for further runs.
+    settings : the chosen rung's settings (``dt`` in s), to put in the scene for further
+        runs.
     result : the chosen rung's result (``None`` if not ``met``).
-    table : one row per rung run: ``rung``, ``dt``, [``refreeze_deg``], ``cpu_s``,
+    table : one row per rung run: ``rung``, ``dt``, ``cpu_s``,
         ``n_events``, the quantities, ``diff_next`` = d(l, l + 1) and ``diff_next2`` =
         d(l, l + 2) of (A1) (NaN where that rung was not run), ``chosen``, ``cached``
         (loaded from the store, not run).
@@ -245,7 +234,7 @@ class FidelityChoice:
         if self.rung is not None:
             ax.axvline(t["dt"].iloc[self.rung], color="k", lw=0.8, ls="--", label="chosen")
         ax.set_xscale("log")
-        ax.set_xlabel("dt [s] (refreeze angle scaled with it)")
+        ax.set_xlabel("dt [s]")
         ax.set_ylabel("quantity / finest rung")
         ax.legend(fontsize=7)
         fig.tight_layout()
@@ -260,7 +249,7 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
 
     Parameters
     ----------
-    scene : a :class:`gearmodal.scene.Scene` (its ``dt`` and refreeze angle are the scale;
+    scene : a :class:`gearmodal.scene.Scene` (its ``dt`` is the scale;
         its method is replaced by ``"exact"``).
     tol : relative tolerance on every quantity, > 0 (0.05 = 5 %).
     coarsest : rung 0's settings are this many times the scene's (>= 1).

@@ -153,7 +153,6 @@ def cmd_simulate(args) -> int:
         print(f"auto: rung {auto.rung} of {len(auto.table)}"
               + (f" ({loaded} loaded from the store)" if loaded else "")
               + f", dt {st['dt']:.6g} s"
-              + (f", refreeze {st['refreeze_deg']:.6g} deg" if "refreeze_deg" in st else "")
               + f" (within {auto.tol:g} of the next two finer rungs); wrote {out}/auto.csv")
     fig = sim.plot()
     fig.savefig(out / "forces.png", dpi=130)

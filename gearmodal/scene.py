@@ -41,7 +41,6 @@ The turbine in wind, simulated together with the gearbox model of ``scene.model`
     mounting_azimuth_deg = 0.0           # overrides the turbine file's
     aero_dt = 0.02                       # s, aerodynamic step
     aero_hold = "interpolate"            # interpolate | hold | linear
-    refreeze_deg = 2.0
 
     [wind]                               # gearmodal.turbine.Wind fields
     mean_speed = 10.0
@@ -63,8 +62,7 @@ from .model.model import Model
 _SCENE_KEYS = {"model", "t_end", "dt", "method", "speed_rpm", "tolerance"}
 _TOP = {"scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind"}
 _TURBINE_KEYS = {"file", "rotor_speed0_rpm", "azimuth0_deg", "connected",
-                 "mounting_azimuth_deg", "aero_dt", "aero_hold", "refreeze_deg",
-                 "refreeze_speed"}
+                 "mounting_azimuth_deg", "aero_dt", "aero_hold", "rebase_speed"}
 _LOAD_FILE_KEYS = {"path", "format", "t_start", "mapping"}
 _WAVE = {"mean", "amplitude", "frequency_hz", "phase_deg"}
 
@@ -284,8 +282,7 @@ def _turbine(spec: dict, wspec: dict, p: Path, t_end: float):
         turbine.mounting_azimuth_deg = v.number("turbine.mounting_azimuth_deg",
                                                 spec["mounting_azimuth_deg"], "deg")
     opts = {}
-    for key in ("rotor_speed0_rpm", "azimuth0_deg", "aero_dt", "refreeze_deg",
-                "refreeze_speed"):
+    for key in ("rotor_speed0_rpm", "azimuth0_deg", "aero_dt", "rebase_speed"):
         if key in spec:
             opts[key] = v.number(f"turbine.{key}", spec[key], "")
     if "connected" in spec:

@@ -132,46 +132,6 @@ def test_result_outputs(tmp_path):
     assert sim.double_contact().empty
 
 
-def test_refreeze_converges_to_the_time_varying_solution():
-    """A body on anisotropic fixed supports, described in a frame turning at Omega, has
-    periodic coefficients. Written out independently in the rotating frame,
-    m u'' + 2 m Omega J u' + (R^T K_g R - m Omega^2) u = 0 with R = Rz(Omega t), solved by
-    DOP853; the exact method with refreezing converges to it as refreeze_deg shrinks."""
-    from scipy.integrate import solve_ivp
-
-    mass, kx, ky, rpm = 2.0, 4e5, 1e5, 120.0
-    om = rpm * 2 * math.pi / 60
-    m = gm.Model("aniso", input="body")
-    m.add(gm.Frame("rot", 1.0))
-    m.add(gm.RigidBody(name="body", mass=mass, inertia=1.0, dofs="planar", frame="rot",
-                       speed_ratio=1.0))
-    m.add(gm.Bearing("support", "body", None, stiffness={"x": kx, "y": ky, "theta": 1e4}))
-    J = np.array([[0.0, -1.0], [1.0, 0.0]])
-    Kg = np.diag([kx, ky])
-
-    def rhs(t, z):
-        c, s = math.cos(om * t), math.sin(om * t)
-        R = np.array([[c, -s], [s, c]])
-        K = R.T @ Kg @ R - mass * om**2 * np.eye(2)
-        u, v = z[:2], z[2:]
-        return np.r_[v, -(2 * mass * om * J @ v + K @ u) / mass]
-
-    t_end, dt = 0.5, 2.5e-4  # 0.18 deg of azimuth per step
-    ref = solve_ivp(rhs, (0, t_end), [1e-3, 0, 0, 0], method="DOP853", rtol=1e-12,
-                    atol=1e-16, t_eval=np.arange(0, t_end + dt / 2, dt))
-    errs = []
-    for tol in (8.0, 2.0, 0.5):
-        sim = gm.simulate(m, t_end, dt=dt, q0={"body.x": 1e-3}, speed_rpm=rpm,
-                          refreeze_deg=tol)
-        err = np.abs(sim.q[["body.x", "body.y"]].to_numpy() - ref.y[:2].T).max() / 1e-3
-        errs.append(err)
-        assert sim.stats["n_freezes"] >= int(math.degrees(om * t_end) / tol)
-    # midpoint freezing is second order in the tolerance: 4x smaller tolerance, ~16x smaller
-    assert errs[0] > errs[1] > errs[2]
-    assert errs[1] / errs[2] > 8
-    assert errs[2] < 1e-3
-
-
 def test_scipy_reference_does_not_flip_forever_at_a_tangent_contact():
     """Starting at rest at q = 0 every flank touches with zero gap and rate; solve_ivp restarted
     at the root used to report the same event again and flip the state forever (found by the

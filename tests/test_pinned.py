@@ -69,7 +69,7 @@ def test_torsional_drivetrain_runs_without_the_shaft_end_force():
     """The 600 kW drivetrain with every stage torsional (the fidelity ladder's DOF rung): it
     assembles, its geometry interpolates exactly, and the turbine run goes without the
     shaft-end force (no carrier translation to take it), which its settings say."""
-    from gearmodal.integrate.refreeze import AzimuthAssembler
+    from gearmodal.integrate.azimuth import AzimuthAssembler
     from gearmodal.scene import load_scene
 
     sc = load_scene("studies/scenes/600kw_turbine_10ms.toml",

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
 
 import numpy as np
 import pandas as pd
@@ -21,9 +20,9 @@ import pandas as pd
 from ..assembly import Assembly
 from ..errors import ModelError
 from ..model.model import Model
+from .azimuth import AzimuthAssembler
 from .exact import run_exact
 from .newmark import run_newmark
-from .refreeze import AzimuthAssembler, QuasiStatic
 from .result import EVENT_COLUMNS, SimulationResult
 from .scipy_ref import run_scipy
 from .system import PiecewiseLinearSystem
@@ -33,7 +32,8 @@ _PANDAS_3 = int(pd.__version__.split(".")[0]) >= 3
 
 METHODS = {"exact": run_exact, "newmark": run_newmark, "scipy": run_scipy}
 
-__all__ = ["METHODS", "SimulationResult", "reconcile", "simulate"]
+__all__ = ["METHODS", "OPTIONS", "SimulationResult", "build_result", "check_options",
+           "event_array", "reconcile", "simulate"]
 
 
 def _load_grid(asm: Assembly, loads, t: np.ndarray) -> np.ndarray:
@@ -86,10 +86,35 @@ def rotating_geometry(model: Model) -> bool:
     return not same
 
 
+#: the options each method takes (``simulate(..., **options)``); anything else is refused
+OPTIONS = {"exact": ("max_events_per_step", "propagator"),
+           "newmark": (),
+           "scipy": ("scipy_method", "rtol", "atol", "max_events", "max_step", "first_step")}
+
+
+def check_options(method: str, options: dict) -> None:
+    """Refuse an option ``method`` does not take, naming it and the ones it does."""
+    for key in options:
+        if key not in OPTIONS[method]:
+            allowed = ", ".join(OPTIONS[method]) or "none"
+            raise ModelError(key, f"is not an option of method={method!r} (its options: "
+                             f"{allowed})")
+
+
+class _Reduced:
+    """A coupled model assembled and reduced to its independent coordinates at any azimuth
+    (the turning geometry of a coupled system)."""
+
+    def __init__(self, model):
+        self.model = model
+
+    def assemble(self, azimuth: float = 0.0):
+        return self.model.assemble(azimuth=azimuth).reduced()
+
+
 def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
              q0: dict | None = None, v0: dict | None = None, method: str = "exact",
-             speed_rpm: float = 0.0, refreeze_deg: float = 2.0,
-             **options) -> SimulationResult:
+             speed_rpm: float = 0.0, **options) -> SimulationResult:
     """Simulate the nonlinear contact dynamics of ``model`` from 0 to ``t_end`` (s).
 
     Parameters
@@ -98,21 +123,22 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     t_end : end time, s. dt : propagation and output step, s (the exact method detects every
         state change inside a step regardless of ``dt``).
     loads : ``{load name: value}`` with a constant, a callable of time or a pandas Series
-        indexed by time (linear in between); N or N m.
+        indexed by time (linear in between); N or N m. A load is fixed in its body's axes; a
+        body turning against the ground carries it round.
     q0, v0 : initial displacements and velocities by DOF name (others 0). The initial contact
         state follows from ``q0`` (a contact is closed when it penetrates).
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``.
-    speed_rpm : input speed at which gyroscopic/centripetal terms are frozen; the input
-        azimuth advances at it.
-    refreeze_deg : when the model's geometry depends on the input azimuth (a rotating carrier
-        against a fixed housing, anisotropic fixed supports of a rotating body), the matrices
-        are frozen at the middle of segments over which the azimuth turns by at most this many
-        degrees, and refrozen for the next segment (state carried over exactly). Segments are
-        whole output steps, so the effective tolerance is at least the azimuth of one ``dt``.
-        Smaller is more accurate and costs more exponentials; a measured knob (DESIGN 3.2).
+    speed_rpm : input speed (either sense) at which gyroscopic/centripetal terms are taken;
+        the input azimuth turns at it from 0. Where frames turn against each other (a carrier
+        against the housing, a rotating body on anisotropic ground supports or in a clearance
+        given in ground axes) the system is time-periodic and every method integrates it as
+        such: the exact method sums the series of the time-varying system and finds crossings
+        of the turning gaps on it (:mod:`gearmodal.integrate.periodic`); ``"scipy"`` and
+        ``"newmark"`` evaluate the matrices at each instant's (step's) azimuth.
     options : method options: ``max_events_per_step`` and ``propagator`` (``"taylor"``,
         the default, or ``"expm"``; see :func:`gearmodal.integrate.exact.run_exact`) for the
-        exact method; ``scipy_method``, ``rtol``, ``atol`` (scipy).
+        exact method; ``scipy_method``, ``rtol``, ``atol``, ``max_events``, ``max_step``,
+        ``first_step`` (scipy; the last two go to ``solve_ivp``). Any other option is refused.
 
     Examples
     --------
@@ -126,113 +152,65 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     """
     if method not in METHODS:
         raise ModelError("method", f"= {method!r}: must be one of {', '.join(map(repr, METHODS))}")
+    check_options(method, options)
     for label, val in (("t_end", t_end), ("dt", dt)):
         if not isinstance(val, (int, float)) or isinstance(val, bool) or not math.isfinite(val) \
                 or val <= 0:
             raise ModelError(label, f"= {val!r}: must be a finite number > 0 s")
+    if not isinstance(speed_rpm, (int, float)) or isinstance(speed_rpm, bool) \
+            or not math.isfinite(speed_rpm):
+        raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number (rpm)")
     n_steps = int(math.ceil(t_end / dt - 1e-9))
     if n_steps > 50_000_000:
         raise ModelError("dt", f"= {dt!r}: {n_steps} steps to {t_end} s is more than 5e7")
-    if not isinstance(refreeze_deg, (int, float)) or not refreeze_deg > 0:
-        raise ModelError("refreeze_deg", f"= {refreeze_deg!r}: must be a number > 0 deg")
     from ..coupling import Coupled
 
+    omega = float(speed_rpm) * 2 * math.pi / 60  # the input azimuth is omega t
     casm = None  # the full assembly of a coupled system, solved in q = N z
+    geo = None
     if isinstance(model, Assembly):
-        asm, name, segments = model, "", [(0, n_steps, model.azimuth)]
+        asm, name = model, ""
         if getattr(model, "N", None) is not None:
             casm, asm = model, model.reduced()
     elif isinstance(model, (Model, Coupled)):
         asm, name = model.assemble(), model.name
         if isinstance(model, Coupled):
             casm, asm = asm, asm.reduced()
-        om = float(speed_rpm) * 2 * math.pi / 60
-        if om > 0 and rotating_geometry(model):
-            per = max(1, int(math.floor(math.radians(refreeze_deg) / om / dt)))
-            segments = [(k, min(k + per, n_steps), om * dt * (k + min(k + per, n_steps)) / 2)
-                        for k in range(0, n_steps, per)]
-        else:
-            segments = [(0, n_steps, 0.0)]
+        if omega != 0.0 and rotating_geometry(model):
+            geo = AzimuthAssembler(_Reduced(model) if casm is not None else model)
     else:
         raise TypeError(f"expected a gm.Model or gm.Coupled, got {type(model).__name__}")
     t = np.arange(n_steps + 1) * dt
-    omega = float(speed_rpm) * 2 * math.pi / 60  # the input azimuth is omega t
-    runner: Callable = METHODS[method]
-    x = None
-    s = None
-    Xs, Ss, events, stats_all = [], [], [], {}
     cpu = time.process_time()
-    system0 = None
-    seg_systems = []
-    geometry = model
-    statics = None
-    if len(segments) > 1 and isinstance(model, Model):
-        geometry = AzimuthAssembler(model)  # exact and ~20x cheaper than assembling anew
-        if geometry.exact:
-            from ..static import free_modes
-
-            # the static conditioning of refrozen segments needs a piecewise-linear model
-            asm.require_piecewise_linear("refrozen geometry (speed > 0 with frames turning "
-                                         "against each other)")
-            statics = QuasiStatic(free_modes(asm), asm.M)
-    for k0, k1, azimuth in segments:
-        seg_asm = asm if len(segments) == 1 else geometry.assemble(azimuth=azimuth)
-        if casm is not None and len(segments) > 1:
-            seg_casm, seg_asm = seg_asm, seg_asm.reduced()
-        else:
-            seg_casm = casm
-        system = PiecewiseLinearSystem(seg_asm, speed_rpm)
-        if system0 is not None and getattr(system0, "rho_bound", None) is not None:
-            system.rho_base = system0.rho_bound  # the geometry turned only (taylor.RHO_MARGIN)
-        if system0 is None:
-            system0 = system
-            if casm is None:
-                x = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
-            else:
-                x = np.concatenate([_initial_coupled(casm, q0, "q0"),
-                                    _initial_coupled(casm, v0, "v0")])
-            s = system.penetration(x) > 0
-            s_init = s.copy()
-        else:
-            s = reconcile(system, x, s, k0 * dt, events, omega * k0 * dt)
-        ts = t[k0:k1 + 1]
-        U = _load_grid(seg_asm, loads, ts)
-        F = U @ seg_asm.B.T + system.f_const[None, :]
-        if statics is not None:
-            # first-order geometry correction on the static deflection (QuasiStatic)
-            g = -(geometry.stiffness_rate(azimuth) @ statics.static(system, s, F[0]))
-            F = F + np.outer(om * ts - azimuth, g)
-        X, S, ev, st = runner(system, dt, k1 - k0, F, x, s, azimuth0=omega * k0 * dt,
-                              **options)
-        system.__dict__.pop("_exact_integrators", None)  # the segment is closed
-        off = k0 * dt
-        events.append(_shift(ev, off))
-        Xs.append(X if not Xs else X[1:])
-        Ss.append(S if not Ss else S[1:])
-        x, s = X[-1].copy(), S[-1].copy()
-        for key, val in st.items():
-            if isinstance(val, (int, float)):
-                stats_all[key] = stats_all.get(key, 0) + val
-        seg_systems.append((k0, k1, system, seg_casm, U))
-    X, S = np.concatenate(Xs), np.concatenate(Ss)
-    events = event_array(events)
-    stats = {**stats_all, "cpu_s": time.process_time() - cpu, "n_events": len(events),
-             "n_steps": n_steps, "n_freezes": len(segments)}
-    result = _result([sg[:3] for sg in seg_systems], t, X, S, events, s_init, stats,
-                     mesh_stiffness(system0, omega * t),
-                   {"model": name, "method": method, "t_end": t_end, "dt": dt,
-                    "speed_rpm": speed_rpm, "refreeze_deg": refreeze_deg, "options": options,
-                    "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
-                              for k, v in (loads or {}).items()},
-                    "q0": q0 or {}, "v0": v0 or {}})
-    if statics is not None:  # springs across turning frames at their exact geometry
-        n = asm.n
-        Fs = geometry.spring_forces(om * t, np.full(len(t), om), X[:, :n], X[:, n:])
-        sp = asm.springs
-        for e, (el, ct) in enumerate(zip(sp.element, sp.contact, strict=True)):
-            result.forces[f"{el}.{ct}"] = Fs[:, e]
+    system = PiecewiseLinearSystem(asm, speed_rpm, geometry=geo)
+    system.azimuth0 = 0.0
+    if casm is None:
+        x = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
+    else:
+        x = np.concatenate([_initial_coupled(casm, q0, "q0"), _initial_coupled(casm, v0, "v0")])
+    s = system.penetration(x) > 0
+    s_init = s.copy()
+    U = _load_grid(asm, loads, t)
+    if system.turning:
+        # loads fixed in their bodies' axes, the load map turning: load values, not forces
+        used = [j for j in range(U.shape[1]) if np.any(U[:, j])]
+        system.use_loads(used)
+        F = np.column_stack([U[:, used], np.ones(len(t))])
+    else:
+        F = U @ asm.B.T + system.f_const[None, :]
+    X, S, ev, st = METHODS[method](system, dt, n_steps, F, x, s, azimuth0=0.0, **options)
+    events = event_array([ev])
+    stats = {**{k: v for k, v in st.items() if isinstance(v, (int, float))},
+             "cpu_s": time.process_time() - cpu, "n_events": len(events), "n_steps": n_steps}
+    result = build_result([(0, n_steps, system)], t, X, S, events, s_init, stats,
+                     mesh_stiffness(system, omega * t),
+                     {"model": name, "method": method, "t_end": t_end, "dt": dt,
+                      "speed_rpm": speed_rpm, "options": options,
+                      "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
+                                for k, v in (loads or {}).items()},
+                      "q0": q0 or {}, "v0": v0 or {}})
     if casm is not None:
-        _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm)
+        _expand_coupled(result, model, casm, [(0, n_steps, system, casm, U)], X, S, speed_rpm)
     return result
 
 
@@ -253,11 +231,12 @@ def event_array(chunks) -> np.ndarray:
 
 def reconcile(system: PiecewiseLinearSystem, x: np.ndarray, s: np.ndarray, t: float,
               events: list, azimuth: float | None = None) -> np.ndarray:
-    """Contact state at a refreeze: the refrozen geometry moves the gaps slightly, so a contact
-    whose state no longer matches its penetration switches at time ``t`` and is logged in
-    ``events`` (its force with the stiffness at input azimuth ``azimuth``, rad, if given).
-    Returns the new state."""
-    p, r = system.penetration(x), system.rate(x)
+    """Contact state after a re-basing of the reference rotation (the turbine run): the rigid
+    rotation moved into the reference azimuth moves the turning gaps by second-order terms
+    (angle times deflection), so a contact whose state no longer matches its penetration
+    switches at time ``t`` and is logged in ``events`` (gaps and force at input azimuth
+    ``azimuth``, rad, if given). Returns the new state."""
+    p, r = system.penetration(x, azimuth), system.rate(x, azimuth)
     k = system.stiffness_at(azimuth) if azimuth is not None else system.k
     s = s.copy()
     for e in np.flatnonzero((p > 0) != s):
@@ -323,7 +302,7 @@ def mesh_stiffness(system: PiecewiseLinearSystem, azimuth: np.ndarray):
     return system.variation.table(system.k, azimuth, system.omega < 0)
 
 
-def _result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings) -> SimulationResult:
+def build_result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings) -> SimulationResult:
     """The :class:`SimulationResult` of a run: its tables are built on first read
     (:class:`_Tables`). ``events``: (n, 6) rows or a list of tuples (:func:`event_array`).
     ``mesh_k``: :func:`mesh_stiffness` of the run."""
@@ -402,13 +381,11 @@ class _Tables:
         seg_systems, t, X, S = self.seg_systems, self.t, self.X, self.S
         system = self.system
         asm = system.asm
-        n = system.n
         c = asm.contacts
         P = np.empty((len(t), system.n_contacts))
         R = np.empty_like(P)
-        for k0, k1, sy in seg_systems:  # each segment with the geometry it was frozen at
-            P[k0:k1 + 1] = X[k0:k1 + 1, :n] @ sy.W.T - sy.offset
-            R[k0:k1 + 1] = X[k0:k1 + 1, n:] @ sy.W.T
+        for k0, k1, sy in seg_systems:  # each segment with its geometry (turning rows: exact)
+            P[k0:k1 + 1], R[k0:k1 + 1] = sy.gaps(X[k0:k1 + 1], t[k0:k1 + 1] - t[k0])
         # alternating mesh flanks: every contact's stiffness at each time
         K = system.k if self.mesh_k is None else self.mesh_k
         Fc = np.where(S, K * P + system.c * R, 0.0)
@@ -435,9 +412,7 @@ class _Tables:
         if sp is not None and len(sp):
             Fs = np.empty((len(t), len(sp)))
             for k0, k1, sy in seg_systems:
-                w = sy.asm.springs.W
-                Fs[k0:k1 + 1] = ((X[k0:k1 + 1, :n] @ w.T) * sp.stiffness
-                                 + (X[k0:k1 + 1, n:] @ w.T) * sp.damping)
+                Fs[k0:k1 + 1] = sy.spring_forces(X[k0:k1 + 1], t[k0:k1 + 1] - t[k0])
             blocks.append(Fs)
             labels += [f"{el}.{ct}" for el, ct in zip(sp.element, sp.contact, strict=True)]
         rd = asm.round

@@ -151,6 +151,10 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     if propagator not in PROPAGATORS:
         raise ModelError("propagator", f"= {propagator!r}: must be one of "
                          + ", ".join(map(repr, PROPAGATORS)))
+    if propagator == "expm" and system.turning:
+        raise ModelError("propagator", "= 'expm' propagates frozen matrices and cannot follow "
+                         "turning geometry (frames turning against each other at speed); use "
+                         "propagator='taylor'")
     if propagator == "expm" and system.alternating:
         raise ModelError("propagator", "= 'expm' caches propagators per contact state and "
                          "cannot follow an alternating mesh stiffness (Mesh.alternation); use "

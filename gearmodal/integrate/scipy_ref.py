@@ -13,6 +13,11 @@ event function; its events are logged with contact ``radial``.
 
 An alternating mesh stiffness (``Mesh.alternation``) is followed by ending the solver's span
 at every scheduled change and restarting with the new stiffness (exact switching times).
+
+A turning system (frames turning against each other, ``system.turning``) is integrated as the
+time-varying system it is: stiffness, damping, contact rows and load map evaluated at each
+instant's azimuth (:meth:`PiecewiseLinearSystem.at`), independently of the exact method's
+series, which it checks.
 """
 
 from __future__ import annotations
@@ -29,6 +34,14 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
               atol: float = 1e-12, max_events: int = 10_000_000, azimuth0: float = 0.0,
               **options):
     n = system.n
+    turning = system.turning
+    if turning and system.asm.round is not None:
+        raise ModelError("method", "= 'scipy' does not integrate a round clearance on turning "
+                         "geometry")
+
+    def azimuth(tt):
+        return azimuth0 + system.omega * tt
+
     t_grid = np.arange(n_steps + 1) * dt
     X = np.empty((n_steps + 1, 2 * n))
     S = np.empty((n_steps + 1, system.n_contacts), dtype=bool)
@@ -53,10 +66,15 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
 
         sr_now = sr.copy()  # the round clearances' state over this restart span
 
-        def rhs(tt, xx, A=A, f=f, Minv=system.Minv, sr=sr_now):
-            k = min(int(tt / dt), n_steps - 1)
-            w = tt / dt - k
-            F = F_grid[k] * (1 - w) + F_grid[k + 1] * w + f
+        ks_now = ks.copy()
+
+        def rhs(ti, xx, A=A, f=f, Minv=system.Minv, sr=sr_now, s=s, ks=ks_now):
+            k = min(int(ti / dt), n_steps - 1)
+            w = ti / dt - k
+            u = F_grid[k] * (1 - w) + F_grid[k + 1] * w
+            if turning:  # the time-varying system at this instant's azimuth
+                A, f = system.first_order(s, ks, system.at(azimuth(ti)))
+            F = system.generalized_force(ti, u) + f
             if rd.nr:
                 F = F + rd.force(xx, sr)
             out = A @ xx
@@ -64,7 +82,10 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             return out
 
         def make(e, active):
-            def ev(tt, xx):
+            def ev(ti, xx):
+                if turning:
+                    fr = system.at(azimuth(ti))
+                    return fr["W"][e] @ xx[:n] - fr["offset"][e]
                 return system.W[e] @ xx[:n] - system.offset[e]
             ev.terminal = True
             ev.direction = -1.0 if active else 1.0
@@ -122,7 +143,7 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             if muted:  # the short muted span ended without an event: continue normally
                 x, t = np.asarray(sol.y)[:, -1].copy(), t_stop
                 # a muted contact whose state no longer matches its gap switches now
-                p, r = system.penetration(x), system.rate(x)
+                p, r = system.penetration(x, azimuth(t)), system.rate(x, azimuth(t))
                 for e in sorted(muted):
                     if e >= nc:
                         sr = rd.switch(x, sr, e - nc, float(t), nc, events, check=True)
@@ -149,7 +170,7 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             muted |= set(fired)  # no progress since the restart: tangent contacts
         else:
             muted = set()
-        r = system.rate(x)
+        r = system.rate(x, azimuth(te))
         for e in fired:
             if e >= nc:
                 sr = rd.switch(x, sr, e - nc, float(te), nc, events)

@@ -40,11 +40,19 @@ class PiecewiseLinearSystem:
 
     Parameters
     ----------
-    asm : the assembled model.
-    speed_rpm : input speed; gyroscopic, centripetal and centrifugal terms are frozen at it.
+    asm : the assembled model (at the run's start azimuth when ``geometry`` is given).
+    speed_rpm : input speed; gyroscopic, centripetal and centrifugal terms are frozen at it,
+        and the input azimuth turns at it.
+    geometry : an :class:`~gearmodal.integrate.azimuth.AzimuthAssembler` of the model whose
+        frames turn against each other: the system is then time-periodic, its constant part
+        held here (``K0``, ``C0``, ``W``, ``offset`` with the turning contacts' rows zero) and
+        its turning harmonics in ``periodic`` (:mod:`gearmodal.integrate.periodic`), integrated
+        exactly by the Taylor propagator; :meth:`at` gives the frozen matrices at any azimuth
+        (the reference methods).
     """
 
-    def __init__(self, asm: Assembly, speed_rpm: float = 0.0, inputs: np.ndarray | None = None):
+    def __init__(self, asm: Assembly, speed_rpm: float = 0.0, inputs: np.ndarray | None = None,
+                 geometry=None):
         self.asm = asm
         n = asm.n
         self.n = n
@@ -58,12 +66,26 @@ class PiecewiseLinearSystem:
         # scipy wrappers' checks cost more than the solves at these sizes)
         self.Linv = np.linalg.inv(L)
         self.Minv = self.Linv.T @ self.Linv
-        self.K0 = asm.K + om**2 * asm.K_cent
-        self.C0 = asm.C + om * asm.G
+        self.geometry = None
+        self.periodic = None
+        self.GT = np.zeros((1, 0, 0), dtype=complex)  # turning load harmonics (use_loads)
+        self.load_columns = None
+        K, C, W, off = asm.K, asm.C, asm.contacts.W, asm.contacts.offset
+        if geometry is not None:
+            from .periodic import periodic_data
+
+            const, self.periodic = periodic_data(geometry, self.Minv, om)
+            if self.periodic is not None:
+                self.geometry = geometry
+                K, C = const["K"], const["C"]
+                W, off = const["contacts.W"], const["contacts.offset"]
+        self.K0 = K + om**2 * asm.K_cent
+        self.C0 = C + om * asm.G
+        self.C_extra = None  # add_damping
         self.f_const = om**2 * asm.f_cent
         c = asm.contacts
-        self.W = np.ascontiguousarray(c.W)
-        self.offset = c.offset.copy()
+        self.W = np.ascontiguousarray(W)
+        self.offset = np.array(off, dtype=float)
         self.k = c.stiffness.copy()
         self.c = c.damping.copy()
         self.names = [f"{e}:{f}" for e, f in zip(c.element, c.contact, strict=True)]
@@ -84,6 +106,67 @@ class PiecewiseLinearSystem:
         self.MinvU = self.Minv
         if inputs is not None:
             self.set_inputs(inputs)
+
+    @property
+    def turning(self) -> bool:
+        """True when the geometry turns (a time-periodic system, ``periodic`` set)."""
+        return self.periodic is not None
+
+    def use_loads(self, columns: list[int], constant: bool = True) -> None:
+        """Forces of a run are given as values of the load map's ``columns`` (a grid (rows,
+        m) with m = ``len(columns)`` plus one when ``constant``: then the last column
+        multiplies the constant centrifugal force ``f_const``, give it 1); a turning load map
+        is followed exactly (the loads are fixed in their own axes, the map turns)."""
+        from .periodic import load_harmonics
+
+        extra = self.f_const[:, None] if constant else None
+        if self.geometry is not None:
+            self.MinvU, self.GT = load_harmonics(self.geometry, self.Minv, list(columns), extra)
+        else:
+            B = self.asm.B[:, list(columns)]
+            cols = np.concatenate([B] + ([extra] if extra is not None else []), axis=1)
+            self.MinvU = np.ascontiguousarray(self.Minv @ cols)
+            self.GT = np.zeros((1, 0, 0), dtype=complex)
+        self.load_columns = (list(columns), constant)
+
+    def generalized_force(self, t: float, u: np.ndarray) -> np.ndarray:
+        """The generalised force (n,) at time ``t`` (s from the run's start, azimuth
+        ``azimuth0 + omega t``) of one row ``u`` of the force grid: the load values when
+        :meth:`use_loads` was called (the load map at that azimuth), else ``u`` itself."""
+        if self.load_columns is None:
+            return u
+        cols, constant = self.load_columns
+        B = self.at(self.azimuth0 + self.omega * t)["B"][:, cols]
+        F = B @ u[:len(cols)]
+        return F + self.f_const * u[-1] if constant else F
+
+    def add_damping(self, dof: int, value: float) -> None:
+        """Add a viscous damper ``value`` (N m s/rad or N s/m) on coordinate ``dof`` (the
+        generator's tangent slip damping in the turbine run); before the first propagation."""
+        if "_exact_integrators" in self.__dict__:
+            raise ModelError("damping", "add dampers before the first propagation")
+        if self.C_extra is None:
+            self.C_extra = np.zeros((self.n, self.n))
+        self.C_extra[dof, dof] += value
+        self.C0 = self.C0.copy()
+        self.C0[dof, dof] += value
+
+    #: input azimuth at the run's start (rad): set by the run (turning geometry, alternation)
+    azimuth0 = 0.0
+
+    def at(self, azimuth: float) -> dict:
+        """Frozen matrices at input ``azimuth`` (rad): ``K0``, ``C0``, ``W``, ``offset``, ``B``
+        (the reference methods of a turning system evaluate them at each instant)."""
+        if self.geometry is None:
+            return {"K0": self.K0, "C0": self.C0, "W": self.asm.contacts.W,
+                    "offset": self.asm.contacts.offset, "B": self.asm.B}
+        v = self.geometry._values(float(azimuth))
+        om = self.omega
+        C0 = v["C"] + om * self.asm.G
+        if self.C_extra is not None:
+            C0 = C0 + self.C_extra
+        return {"K0": v["K"] + om**2 * self.asm.K_cent, "C0": C0,
+                "W": v["contacts.W"], "offset": v["contacts.offset"], "B": v["B"]}
 
     def set_inputs(self, inputs: np.ndarray) -> None:
         """Set the input basis from spanning columns ``inputs`` (n, k): every generalised force
@@ -140,20 +223,24 @@ class PiecewiseLinearSystem:
             return np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(0)
         return self.variation.schedule(azimuth0, self.omega, duration)
 
-    def matrices(self, s: np.ndarray, k: np.ndarray | None = None):
+    def matrices(self, s: np.ndarray, k: np.ndarray | None = None, frozen: dict | None = None):
         """``(K_s, C_s, f_s)`` of contact state ``s`` (booleans), with contact stiffnesses
-        ``k`` (default: the system's)."""
+        ``k`` (default: the system's); ``frozen``: the matrices of :meth:`at` (default: the
+        constant part)."""
         k = self.k if k is None else k
-        W = self.W[s]
-        K = self.K0 + (W.T * k[s]) @ W
-        C = self.C0 + (W.T * self.c[s]) @ W
-        f = W.T @ (k[s] * self.offset[s])
+        K0, C0, W, off = ((self.K0, self.C0, self.W, self.offset) if frozen is None else
+                          (frozen["K0"], frozen["C0"], frozen["W"], frozen["offset"]))
+        W = W[s]
+        K = K0 + (W.T * k[s]) @ W
+        C = C0 + (W.T * self.c[s]) @ W
+        f = W.T @ (k[s] * off[s])
         return K, C, f
 
-    def first_order(self, s: np.ndarray, k: np.ndarray | None = None):
+    def first_order(self, s: np.ndarray, k: np.ndarray | None = None,
+                    frozen: dict | None = None):
         """``(A_s, f_s)``: the state matrix and the constant contact force of state ``s``."""
         n = self.n
-        K, C, f = self.matrices(s, k)
+        K, C, f = self.matrices(s, k, frozen)
         A = np.zeros((2 * n, 2 * n))
         A[:n, n:] = np.eye(n)
         A[n:, :n] = -self.Minv @ K
@@ -182,13 +269,49 @@ class PiecewiseLinearSystem:
         c = np.linalg.norm(Li @ C @ Li.T)
         return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
 
-    def penetration(self, x: np.ndarray) -> np.ndarray:
-        """Penetration ``W q - offset`` of every contact."""
+    def penetration(self, x: np.ndarray, azimuth: float | None = None) -> np.ndarray:
+        """Penetration ``W q - offset`` of every contact (a turning system: at input
+        ``azimuth``, rad, default the run's start)."""
+        if self.geometry is not None:
+            f = self.at(self.azimuth0 if azimuth is None else azimuth)
+            return f["W"] @ x[: self.n] - f["offset"]
         return self.W @ x[: self.n] - self.offset
 
-    def rate(self, x: np.ndarray) -> np.ndarray:
-        """Penetration rate ``W v``."""
+    def rate(self, x: np.ndarray, azimuth: float | None = None) -> np.ndarray:
+        """Penetration rate ``W v`` (the velocity term of the gap's rate)."""
+        if self.geometry is not None:
+            return self.at(self.azimuth0 if azimuth is None else azimuth)["W"] @ x[self.n:]
         return self.W @ x[self.n:]
+
+    def gaps(self, X: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Penetrations ``W q - offset`` and their velocity terms ``W v`` of every contact for
+        states ``X`` (rows, 2n) at times ``t`` (s from the run's start), the turning rows at
+        each time's azimuth."""
+        n = self.n
+        P = X[:, :n] @ self.W.T - self.offset
+        R = X[:, n:] @ self.W.T
+        if self.turning:
+            pr = self.periodic
+            az = self.azimuth0 + self.omega * np.asarray(t, dtype=float)
+            E = np.exp(1j * np.outer(az, pr.harm))
+            Wt = np.einsum("th,hej->tej", E, pr.TW).real
+            P[:, pr.tc_idx] = (np.einsum("tej,tj->te", Wt, X[:, pr.tcols])
+                               - (E @ pr.TOFF).real)
+            R[:, pr.tc_idx] = np.einsum("tej,tj->te", Wt, X[:, n + pr.tcols])
+        return P, R
+
+    def spring_forces(self, X: np.ndarray, t: np.ndarray) -> np.ndarray | None:
+        """Forces ``k w q + c w v`` of the always-active springs (rows, springs) at times ``t``
+        (s from the run's start), their rows at each time's azimuth (the forces of the
+        equations of motion, whose damping is ``C(psi) v``); ``None`` without springs."""
+        sp = self.asm.springs
+        if sp is None or not len(sp):
+            return None
+        n = self.n
+        if self.geometry is None:
+            return (X[:, :n] @ sp.W.T) * sp.stiffness + (X[:, n:] @ sp.W.T) * sp.damping
+        az = self.azimuth0 + self.omega * np.asarray(t, dtype=float)
+        return self.geometry.spring_forces(az, np.zeros(len(az)), X[:, :n], X[:, n:])
 
     def forces(self, x: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Contact forces ``k p + c p'`` of the active contacts (0 for open ones), N or N m."""

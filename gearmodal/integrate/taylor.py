@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import functools
 import math
+import types
 
 import numba
 import numpy as np
@@ -116,45 +117,152 @@ def _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc):
             _toggle(U, W, kc, cc, off, e, 1.0, MKC, acc)
 
 
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _term(MKC, B, y, k, c2, c1):
+    """``B[k + 2] = [M^-1 K_s, M^-1 C_s] [c2 B[k]; c1 B[k + 1]]``, the frozen part of (T1)."""
+    n = B.shape[1]
+    n2 = n - n % 2
+    for j in range(n):
+        y[j] = B[k, j] * c2
+        y[n + j] = B[k + 1, j] * c1
+    # two rows at a time: two independent sums hide the latency of each (-12 %)
+    for i in range(0, n2, 2):
+        a0 = 0.0
+        a1 = 0.0
+        for j in range(2 * n):
+            yj = y[j]
+            a0 += MKC[i, j] * yj
+            a1 += MKC[i + 1, j] * yj
+        B[k + 2, i] = a0
+        B[k + 2, i + 1] = a1
+    for i in range(n2, n):
+        a = 0.0
+        for j in range(2 * n):
+            a += MKC[i, j] * y[j]
+        B[k + 2, i] = a
+
+
 @numba.njit(cache=True, fastmath=True)
 def _coefficients(MKC, g0, g1, q, v, h, B, y):
     """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions by (T1) with the forcing terms
     ``g0``, ``g1``; ``MKC`` is ``[M^-1 K_s, M^-1 C_s]`` side by side (one contiguous product
     per term); ``y`` is scratch of length 2 n (no allocation in the hot loop)."""
     n_terms, n = B.shape
-    n2 = n - n % 2
     h2 = h * h
     for i in range(n):
         B[0, i] = q[i]
         B[1, i] = v[i] * h
     for k in range(n_terms - 2):
         den = 1.0 / ((k + 1.0) * (k + 2.0))
-        c2 = -h2 * den
-        c1 = -(k + 1.0) * h * den
-        for j in range(n):
-            y[j] = B[k, j] * c2
-            y[n + j] = B[k + 1, j] * c1
-        # two rows at a time: two independent sums hide the latency of each (-12 %)
-        for i in range(0, n2, 2):
-            a0 = 0.0
-            a1 = 0.0
-            for j in range(2 * n):
-                yj = y[j]
-                a0 += MKC[i, j] * yj
-                a1 += MKC[i + 1, j] * yj
-            B[k + 2, i] = a0
-            B[k + 2, i + 1] = a1
-        for i in range(n2, n):
-            a = 0.0
-            for j in range(2 * n):
-                a += MKC[i, j] * y[j]
-            B[k + 2, i] = a
+        _term(MKC, B, y, k, -h2 * den, -(k + 1.0) * h * den)
         if k == 0:
             for i in range(n):
                 B[2, i] += g0[i] * h2 * den
         elif k == 1:
             for i in range(n):
                 B[3, i] += g1[i] * h2 * h * den
+
+
+@numba.njit(cache=True, fastmath=True)
+def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, ZK, ZC, Y, Yd, TW,
+                          OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS):
+    """:func:`_coefficients` of the time-varying system (T2): the frozen part as (T1), plus
+    the turning harmonics of :mod:`gearmodal.integrate.periodic` by Cauchy products with the
+    piece's exponential series ``E`` (H1, n_terms) ((P2), ``E[0]`` the constant 1):
+
+        Y_h[k] = sum_j E_h[j] b_(k-j),   Yd_h[k] = sum_j E_h[j] (k - j + 1) b_(k-j+1)
+        b_(k+2) += h^2 den (-Re sum_h ZK_h Y_h[k] - Re sum_h ZC_h Yd_h[k] / h
+                            - Re sum_(h, e closed) TU_(h,e) (E_h * f_e)[k]
+                            + Re sum_h (E_h[k] GV_h + h E_h[k-1] GVS_h))                (T2)
+
+    with ``den = 1 / ((k + 1)(k + 2))``, the turning contacts' penetration series ``P[e, k] =
+    Re sum_h TW_(h,e) . Y_h[k] - OFS[e, k]`` (also kept for their root search), ``PD`` the
+    series of ``w . q_s`` and their force series ``f_e = kt P + ct PD / h`` (``FT``).
+    ``Y``, ``Yd`` (H1, n_terms, nT) complex and ``FT`` are scratch; ``GV``, ``GVS`` (H1, n) the
+    turning loads ``M^-1 Z_h u`` at the piece's start and their rates."""
+    n_terms, n = B.shape
+    H1 = E.shape[0]
+    nT = tcols.shape[0]
+    nTC = TW.shape[1]
+    h2 = h * h
+    # what the turning parts need: the rate products only for a turning damping or turning
+    # contacts, the constant harmonic only for the contacts' rows
+    cturn = False
+    for hh in range(1, H1):
+        for i in krows:
+            for c in range(nT):
+                if ZC[hh, i, c] != 0.0:
+                    cturn = True
+    rates = cturn or nTC > 0
+    loads = False  # turning loads
+    for hh in range(1, H1):
+        for i in range(n):
+            if GV[hh, i] != 0.0 or GVS[hh, i] != 0.0:
+                loads = True
+    h_lo = 0 if nTC > 0 else 1
+    for i in range(n):
+        B[0, i] = q[i]
+        B[1, i] = v[i] * h
+    for k in range(n_terms):
+        # the Cauchy products of what is known: b_0..b_k (and b_(k+1) for the rates)
+        for hh in range(h_lo, H1):
+            for c in range(nT):
+                col = tcols[c]
+                acc = 0j
+                for j in range(k + 1):
+                    acc += E[hh, j] * B[k - j, col]
+                Y[hh, k, c] = acc
+                if rates and k + 1 < n_terms:
+                    acc = 0j
+                    for j in range(k + 1):
+                        acc += E[hh, j] * ((k - j + 1.0) * B[k - j + 1, col])
+                    Yd[hh, k, c] = acc
+        for e in range(nTC):
+            pr = -OFS[e, k]
+            pd = 0.0
+            for hh in range(H1):
+                for c in range(nT):
+                    pr += (TW[hh, e, c] * Y[hh, k, c]).real
+                    if k + 1 < n_terms:
+                        pd += (TW[hh, e, c] * Yd[hh, k, c]).real
+            P[e, k] = pr
+            PD[e, k] = pd
+            FT[e, k] = kt[e] * pr + ct[e] * pd / h if closed[e] else 0.0
+        if k + 2 >= n_terms:
+            continue
+        den = 1.0 / ((k + 1.0) * (k + 2.0))
+        _term(MKC, B, y, k, -h2 * den, -(k + 1.0) * h * den)
+        if k == 0:
+            for i in range(n):
+                B[2, i] += g0[i] * h2 * den
+        elif k == 1:
+            for i in range(n):
+                B[3, i] += g1[i] * h2 * h * den
+        for hh in range(1, H1):
+            ek = E[hh, k] * h2 * den
+            ek1 = E[hh, k - 1] * (h2 * h * den) if k > 0 else 0j
+            if loads:
+                for i in range(n):
+                    B[k + 2, i] += (ek * GV[hh, i] + ek1 * GVS[hh, i]).real
+            for i in krows:
+                acc = 0j
+                for c in range(nT):
+                    acc -= ZK[hh, i, c] * Y[hh, k, c]
+                acc *= h2 * den
+                if cturn:
+                    for c in range(nT):
+                        acc -= (h * den) * ZC[hh, i, c] * Yd[hh, k, c]
+                B[k + 2, i] += acc.real
+        for e in range(nTC):
+            if not closed[e]:
+                continue
+            for hh in range(H1):
+                fe = 0j
+                for j in range(k + 1):
+                    fe += E[hh, j] * FT[e, k - j]
+                fe *= h2 * den
+                for i in range(n):
+                    B[k + 2, i] -= (TU[hh, e, i] * fe).real
 
 
 @numba.njit(cache=True, fastmath=FAST)
@@ -417,7 +525,8 @@ def first_root(coef, work, stk):
 def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0, n_steps,
                dt, h_max,
                terms, tscale, margin, simultaneous, max_events, X, S, EV, n_ev,
-               counts, sched_t, sched_e, sched_k, sched_pos):
+               counts, sched_t, sched_e, sched_k, sched_pos,
+               om, psi0, harm, tcols, krows, ZK, ZC, tc_idx, TW, TOFF, TU, GT):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -434,6 +543,13 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     as ``kc``): alternating mesh stiffness (:mod:`gearmodal.model.mesh_stiffness`). A piece
     ends at the next scheduled time and the change is applied there exactly, to a closed
     contact as a rank-one update (a time event: no state change, no log entry).
+
+    Turning geometry (:mod:`gearmodal.integrate.periodic`; empty arrays for a frozen system):
+    the input azimuth is ``psi0 + om t``; ``harm``, ``tcols``, ``ZK``, ``ZC``, ``tc_idx``,
+    ``TW``, ``TOFF``, ``TU`` as :class:`~gearmodal.integrate.periodic.Periodic` (the turning
+    contacts' rows are zero in ``W``, ``U`` and ``off``: their gaps come from their series) and
+    ``GT`` (H1, n, m) the turning harmonics of ``M^-1`` times the load columns of ``F``. Each
+    piece is then summed by (T2) of :func:`_coefficients_turning`.
     """
     N = x.shape[0]
     n = N // 2
@@ -461,6 +577,24 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     gS = np.empty(n)
     g0 = np.empty(n)
     m = F.shape[1]
+    # turning geometry (empty for a frozen system)
+    H1 = harm.shape[0]
+    nT = tcols.shape[0]
+    nTC = tc_idx.shape[0]
+    turning = H1 > 1
+    E = np.zeros((H1, n_terms), dtype=np.complex128)
+    Y = np.empty((H1, n_terms, nT), dtype=np.complex128)
+    Yd = np.empty((H1, n_terms, nT), dtype=np.complex128)
+    OFS = np.zeros((nTC, n_terms))
+    P = np.zeros((nTC, n_terms))
+    PD = np.zeros((nTC, n_terms))
+    FT = np.zeros((nTC, n_terms))
+    kt = np.empty(nTC)
+    ct = np.empty(nTC)
+    closed = np.empty(nTC, dtype=np.bool_)
+    VA = np.zeros((H1, n), dtype=np.complex128)
+    VS = np.zeros((H1, n), dtype=np.complex128)
+    GV = np.zeros((H1, n), dtype=np.complex128)
     _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
     toggled = 0
     dense = False
@@ -485,6 +619,16 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 a1 += MinvU[i, j] * (F[k + 1, j] - F[k, j])
             gF[i] = a0
             gS[i] = a1 / dt
+        if turning:  # the turning load harmonics at the step start and their rates
+            for hh in range(1, H1):
+                for i in range(n):
+                    z0 = 0j
+                    z1 = 0j
+                    for j in range(m):
+                        z0 += GT[hh, i, j] * F[k, j]
+                        z1 += GT[hh, i, j] * (F[k + 1, j] - F[k, j])
+                    VA[hh, i] = z0
+                    VS[hh, i] = z1 / dt
         t = tk
         count = 0
         fresh = False  # ga, ra hold the gaps at (t, q, v) in state s
@@ -521,21 +665,58 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             work = work_flat[:(DEPTH + 5) * nt].reshape((DEPTH + 5, nt))
             for i in range(n):
                 g0[i] = acc[i] + gF[i] + gS[i] * (t - tk)
-            _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
-            counts[0] += 1
-            while not _converged(Bv, TAIL):
-                counts[1] += 1
-                # a state stiffer than the bound: halve the piece (rescale b_k by 2^-k)
-                h *= 0.5
-                f = 1.0
-                for kk in range(nt):
+            if turning:
+                for e in range(nTC):
+                    kt[e] = kc[tc_idx[e]]
+                    ct[e] = cc[tc_idx[e]]
+                    closed[e] = s[tc_idx[e]]
+                for hh in range(H1):
                     for i in range(n):
-                        Bv[kk, i] *= f
-                    f *= 0.5
+                        GV[hh, i] = VA[hh, i] + VS[hh, i] * (t - tk)
+            counts[0] += 1
+            while True:
+                if turning:
+                    # the exponential series of the piece (P2) and the turning offsets
+                    psi = psi0 + om * t
+                    Ev = E[:, :nt]
+                    for hh in range(H1):
+                        z = 1j * harm[hh] * om * h
+                        Ev[hh, 0] = complex(math.cos(harm[hh] * psi), math.sin(harm[hh] * psi))
+                        for jj in range(1, nt):
+                            Ev[hh, jj] = Ev[hh, jj - 1] * z / jj
+                    for e in range(nTC):
+                        for kk in range(nt):
+                            a = 0.0
+                            for hh in range(H1):
+                                a += (TOFF[hh, e] * Ev[hh, kk]).real
+                            OFS[e, kk] = a
+                    _coefficients_turning(MKC, g0, gS, q, v, h, Bv, ysc, Ev, tcols, krows, ZK, ZC,
+                                          Y[:, :nt], Yd[:, :nt], TW, OFS[:, :nt], TU, kt, ct,
+                                          closed, P[:, :nt], PD[:, :nt], FT[:, :nt], GV, VS)
+                else:
+                    _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
+                if _converged(Bv, TAIL):
+                    break
+                counts[1] += 1
+                # a state stiffer than the bound: halve the piece (the series of h / 2)
+                h *= 0.5
             _evaluate(Bv, 1.0, h, qb, vb)
             if not fresh:
                 _gaps(wptr, widx, wval, off, s, q, v, ga, ra)
             _gaps(wptr, widx, wval, off, s, qb, vb, gb, rb)
+            for e in range(nTC):  # turning contacts: their gaps' series
+                c_ = tc_idx[e]
+                sg = -1.0 if s[c_] else 1.0
+                if not fresh:
+                    ga[c_] = sg * P[e, 0]
+                    ra[c_] = sg * P[e, 1] / h
+                g1 = 0.0
+                d1 = 0.0
+                for kk in range(nt):
+                    g1 += P[e, kk]
+                    d1 += kk * P[e, kk]
+                gb[c_] = sg * g1
+                rb[c_] = sg * d1 / h
             # contacts whose gap has crossed by the end first, the likeliest earliest crossing
             # (linear estimate) first: a certain root gives an early bound, and the others are
             # searched only up to it (often rejected at once); then those flagged as possible
@@ -572,6 +753,10 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     wv = wval[jj]
                     for kk in range(nt):
                         coef[kk] += wv * Bv[kk, col]
+                for et in range(nTC):  # a turning contact: its gap's series (offset in it)
+                    if tc_idx[et] == e:
+                        for kk in range(nt):
+                            coef[kk] = P[et, kk]
                 scale = sg
                 for kk in range(nt):
                     coef[kk] *= scale
@@ -610,7 +795,13 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     for i in range(n):
                         p += W[e, i] * q[i]
                         rr += W[e, i] * v[i]
-                    force = kc[e] * max(p, 0.0) + cc[e] * rr if s[e] else 0.0
+                    wv = rr
+                    for et in range(nTC):  # a turning contact: its series at the event
+                        if tc_idx[et] == e:
+                            p, rr = _value_slope(P[et, :nt], best)
+                            rr /= h
+                            wv = _hpoly(PD[et, :nt], best) / h
+                    force = kc[e] * max(p, 0.0) + cc[e] * wv if s[e] else 0.0
                     EV[n_ev, 0] = t
                     EV[n_ev, 1] = e
                     EV[n_ev, 2] = 1.0 if before else 0.0
@@ -685,6 +876,26 @@ def spectral_bound_all(system) -> float:
     return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
 
 
+#: azimuths at which a turning system's spectral bound is taken (the largest, with RHO_MARGIN)
+BOUND_AZIMUTHS = 8
+
+
+def spectral_bound_turning(system) -> float:
+    """:func:`spectral_bound_all` of a turning system: the largest over ``BOUND_AZIMUTHS``
+    azimuths of a turn, times ``RHO_MARGIN``, plus the fastest turning harmonic ``H |Omega|``
+    (the geometry's own series, (P2) of :mod:`gearmodal.integrate.periodic`). Between the
+    sampled azimuths the tail check of every piece halves one the bound makes too long."""
+    best = 0.0
+    for j in range(BOUND_AZIMUTHS):
+        f = system.at(2.0 * math.pi * j / BOUND_AZIMUTHS)
+        shim = types.SimpleNamespace(n=system.n, Linv=system.Linv, W=f["W"], K0=f["K0"],
+                                     C0=f["C0"], k=system.k, c=system.c,
+                                     k_max=getattr(system, "k_max", system.k))
+        best = max(best, spectral_bound_all(shim))
+    top = float(np.max(system.periodic.harm)) * abs(system.omega)
+    return RHO_MARGIN * best + top
+
+
 class TaylorIntegrator:
     """Per frozen system: the arrays of :func:`taylor_run` (built once, reused by callers that
     advance one system in several calls)."""
@@ -705,7 +916,13 @@ class TaylorIntegrator:
         self.widx = cols.astype(np.int64)
         self.wval = np.ascontiguousarray(system.W[rows, cols])
         base = getattr(system, "rho_base", None)
-        if base:
+        if system.turning:
+            if base:
+                self.rho = float(base)
+            else:
+                self.rho = max(spectral_bound_turning(system), 1e-300)
+            system.rho_bound = self.rho
+        elif base:
             # a refrozen segment of the same system (the geometry turned) passes its
             # predecessor's bound instead of paying ~1 ms of eigenvalues per segment: used with
             # RHO_MARGIN, and the series' tail check still halves any piece it makes too long
@@ -719,11 +936,25 @@ class TaylorIntegrator:
         self.tscale = TERM_BINS * self.rho / reach
         self.h_max = min(reach / self.rho, self.dt)
         self.MinvU = np.ascontiguousarray(system.MinvU)
+        if system.turning:
+            pr = system.periodic
+            GT = system.GT
+            if GT.shape != (len(pr.harm),) + self.MinvU.shape:  # forces given as such
+                GT = np.zeros((len(pr.harm),) + self.MinvU.shape, dtype=complex)
+            self.turning = (pr.harm, pr.tcols, pr.krows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
+                            pr.TOFF, pr.TU, np.ascontiguousarray(GT))
+        else:
+            from .periodic import frozen
+
+            pr, GT = frozen()
+            self.turning = (pr.harm, pr.tcols, pr.krows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
+                            pr.TOFF, pr.TU, GT)
 
     def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray,
             azimuth0: float = 0.0):
         """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`); the input
-        azimuth at the start is ``azimuth0`` (rad; alternating mesh stiffness only)."""
+        azimuth at the start is ``azimuth0`` (rad: alternating mesh stiffness, turning
+        geometry)."""
         sysm = self.sys
         kc = np.array(sysm.stiffness_at(azimuth0), dtype=float)  # changed in place by events
         sched = sysm.schedule(azimuth0, n_steps * self.dt)
@@ -742,7 +973,7 @@ class TaylorIntegrator:
                 sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
                 self.terms, self.tscale, GRAZE_MARGIN,
                 SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts, *sched,
-                sched_pos)
+                sched_pos, sysm.omega, float(azimuth0), *self.turning)
             if status == 0:
                 break
             if status == 1:

@@ -4,7 +4,7 @@ dynamics together (DESIGN 2.5, paper section 5; issue 5's multirate scheme).
 The gearbox model (``600kw.toml``: rotor inertia, main shaft, stages, generator, housing on its
 suspension) carries the whole drivetrain, so its free rotation is the turbine's rotation. Its
 coordinates ``q`` are deflections from a rigid reference rotation ``psi_ref(t) = psi_f +
-Omega_f (t - t_f)`` frozen at the last refreeze time ``t_f``; the rotor's azimuth and speed are
+Omega_f (t - t_f)`` re-based at time ``t_f``; the rotor's azimuth and speed are
 ``psi_ref + q_rotor`` and ``Omega_f + v_rotor``. Two rates:
 
 - **aerodynamic step** ``aero_dt`` (the turbine's own rate): the wind is sampled at the rotating
@@ -22,17 +22,15 @@ Omega_f (t - t_f)`` frozen at the last refreeze time ``t_f``; the rotor's azimut
 The induction generator enters the linear gearbox equations as its tangent at the reference
 speed: torque ``T(w_f) + (dT/dw) (w - w_f)``, i.e. a constant load plus a viscous damper
 ``dT/dw`` on the generator's rotation, so its strong slip damping is implicit (no step
-limit). At each **refreeze** (when the reference has turned ``refreeze_deg`` since the last one,
-its speed has drifted by ``refreeze_speed``, or the generator cuts in) the drivetrain's rigid
-rotation is moved out of ``q`` into the reference (``phi = r^T M q / r^T M r`` with ``r`` the
-free rotation mode; likewise the speed), and the gearbox geometry, speed terms and generator
-tangent are refrozen at the middle of the next segment (:mod:`gearmodal.integrate.refreeze`),
-with the first-order geometry correction on the static deflection
-(:class:`~gearmodal.integrate.refreeze.QuasiStatic`). Refreezes fall on gearbox steps; the
-angle is the accuracy knob (the error grows between first and second order in
-``refreeze_deg``, measured in ``benchmarks/RESULTS.md``). ``psi_mid`` assumes the segment runs
-its full angle; a refreeze forced early (speed drift, cut-in) leaves it off-centre, which the
-geometry correction absorbs to first order.
+limit). The gearbox geometry turns with the reference azimuth and is integrated exactly as the
+time-periodic system it is (:mod:`gearmodal.integrate.periodic`): there is no refreeze. The
+reference is **re-based** only where the speed drifts (by ``rebase_speed`` of the reference
+speed) or the generator cuts in: the drivetrain's rigid rotation is moved out of ``q`` into
+the reference (``phi = r^T M q / r^T M r`` with ``r`` the free rotation mode; likewise the
+speed), and the speed terms and generator tangent are taken at the new speed. Moving ``phi``
+into the azimuth moves the turning gaps by second-order terms (``phi`` times a deflection);
+a contact whose state no longer matches is switched there and logged
+(:func:`gearmodal.integrate.reconcile`).
 
 Loads on the gearbox: the rotor's aerodynamic torque on ``rotor.torque``, the generator torque
 on ``generator.torque`` and the shaft-end force on the first planetary carrier
@@ -62,13 +60,13 @@ from ..errors import ModelError
 from ..integrate import (
     METHODS,
     SimulationResult,
-    _result,
-    _shift,
+    build_result,
+    check_options,
     event_array,
     mesh_stiffness,
     reconcile,
 )
-from ..integrate.refreeze import AzimuthAssembler, QuasiStatic
+from ..integrate.azimuth import AzimuthAssembler
 from ..integrate.system import PiecewiseLinearSystem
 from ..static import equilibrium
 from .rotor import LOAD_COLUMNS
@@ -88,8 +86,8 @@ class DrivetrainResult:
         double contact, load sharing. Its ``q``, ``v`` are elastic deflections: the rigid
         drivetrain rotation is removed (it is in ``turbine.loads``).
     stats : CPU seconds split into ``aero_s`` (blade-element momentum), ``wind_s`` (wind
-        sampling; ``wind_setup_s`` the turbulence box), ``gearbox_s`` (refreezes and
-        integration), with ``cpu_s`` total and ``realtime_ratio`` (simulated s per CPU s,
+        sampling; ``wind_setup_s`` the turbulence box), ``gearbox_s`` (the
+        gearbox integration), with ``cpu_s`` total and ``realtime_ratio`` (simulated s per CPU s,
         without the one-off turbulence box).
     """
 
@@ -199,9 +197,7 @@ def rigid_rotation(asm) -> np.ndarray:
 def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                         dt: float = 2e-3, aero_dt: float = 0.02, aero_hold: str = "interpolate",
                         rotor_speed0_rpm: float = 6.0, azimuth0_deg: float = 0.0,
-                        connected: bool = False, refreeze_deg: float = 1.0,
-                        refreeze_speed: float = 0.01, geometry_rate: bool = True,
-                        input_basis: bool = True,
+                        connected: bool = False, rebase_speed: float = 0.01,
                         method: str = "exact", progress=None,
                         **options) -> DrivetrainResult:
     """Run turbine and gearbox together from ``rotor_speed0_rpm`` for ``t_end`` s.
@@ -212,21 +208,19 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     wind : :class:`Wind`.
     gearbox : :class:`gearmodal.Model` of the drivetrain with bodies ``rotor`` and
         ``generator`` and a planetary stage (``studies/models/600kw.toml``).
-    t_end : s. dt : gearbox propagation and output step, s. aero_dt : aerodynamic step, s (a
-        whole multiple of ``dt``). aero_hold : ``"interpolate"``, ``"hold"`` or ``"linear"``
-        (module docstring).
+    t_end : s. dt : gearbox output step, s (the exact method finds every contact event inside
+        it). aero_dt : aerodynamic step, s (a whole multiple of ``dt``). aero_hold :
+        ``"interpolate"``, ``"hold"`` or ``"linear"`` (module docstring).
     rotor_speed0_rpm, azimuth0_deg : initial rotor speed and blade-1 azimuth.
     connected : start with the generator on the grid (else it cuts in at synchronous speed).
-    refreeze_deg : azimuth between refreezes, deg. refreeze_speed : relative speed drift that
-        forces a refreeze. geometry_rate : apply the first-order geometry correction of a
-        frozen segment (:class:`~gearmodal.integrate.refreeze.QuasiStatic`); ``False`` rings
-        the gearbox at the refreeze rate. input_basis : exact propagators on the span of the
-        segment's force columns (same result, several times cheaper; ``False`` to compare).
-    method : ``"exact"``, ``"newmark"`` or ``"scipy"``; ``options`` go to it.
+    rebase_speed : relative drift of the rotor speed from the reference that re-bases the
+        reference rotation (module docstring).
+    method : ``"exact"``, ``"newmark"`` or ``"scipy"``; ``options`` go to it (refused if it
+        does not take them).
     progress : ``progress(i, n)`` per aerodynamic step (the solver never prints).
     """
     for label, val in (("t_end", t_end), ("dt", dt), ("aero_dt", aero_dt),
-                       ("refreeze_deg", refreeze_deg), ("refreeze_speed", refreeze_speed)):
+                       ("rebase_speed", rebase_speed)):
         if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
             raise ModelError(label, f"= {val!r}: must be a finite number > 0")
     m_sub = round(aero_dt / dt)
@@ -236,6 +230,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         raise ModelError("aero_hold", f"= {aero_hold!r}: must be one of {HOLDS}")
     if method not in METHODS:
         raise ModelError("method", f"= {method!r}: must be one of {', '.join(METHODS)}")
+    check_options(method, options)
     if not (isinstance(rotor_speed0_rpm, (int, float)) and rotor_speed0_rpm >= 0):
         raise ModelError("rotor_speed0_rpm", f"= {rotor_speed0_rpm!r}: must be >= 0 rpm")
     if wind.turbulence_intensity > 0 and wind.duration < t_end:
@@ -257,8 +252,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             raise ModelError("gearbox", f"has no DOF {name!r}: the drivetrain model needs "
                              "bodies 'rotor' and 'generator' (see studies/models/600kw.toml)")
     # the first stage's carrier takes the shaft-end force; a torsional one has no
-    # translation, so the force is not modelled (its columns are zero; the turbine's loads
-    # table still reports it)
+    # translation, so the force is not modelled (the turbine's loads table still reports it)
     carrier = next((b for b in gearbox.bodies if b.endswith(".carrier")), None)
     if carrier is None:
         raise ModelError("gearbox", "has no planetary carrier 'stageN.carrier' to carry the "
@@ -267,20 +261,11 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     bending = carrier_x in asm0.load_names
     n = asm0.n
     i_rot, i_gen = asm0.dof_names.index("rotor.theta"), asm0.dof_names.index("generator.theta")
-    j_rot, j_gen = asm0.load_names.index("rotor.torque"), asm0.load_names.index("generator.torque")
+    names = ["rotor.torque", "generator.torque"]
     if bending:
-        carrier_y = carrier_x[:-1] + "y"
-        j_fx, j_fy = asm0.load_names.index(carrier_x), asm0.load_names.index(carrier_y)
-    else:
-        j_fx = j_fy = j_rot  # multiplied by the zeroed force below
+        names += [carrier_x, carrier_x[:-1] + "y"]
+    cols = [asm0.load_names.index(c) for c in names]
     r = rigid_rotation(asm0)
-    statics = QuasiStatic(r[:, None], asm0.M)
-    load_cols = None
-    if input_basis and method == "exact" and geo.exact:
-        a, b = geo.coef["B"]  # B(psi) = sum_h a_h cos(h psi) + b_h sin(h psi)
-        used = [j_rot, j_gen, j_fx, j_fy] if bending else [j_rot, j_gen]
-        load_cols = np.concatenate([a[:, :, used].transpose(1, 0, 2).reshape(n, -1),
-                                    b[:, :, used].transpose(1, 0, 2).reshape(n, -1)], axis=1)
     Mr = asm0.M @ r
     J = float(r @ Mr)
     g_ratio = float(r[i_gen])  # generator speed per rotor speed, signed
@@ -299,23 +284,30 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         clock["aero_s"] += time.process_time() - tv
         return out
 
+    def reference(om_ref, on_grid):
+        """The gearbox system turning at ``om_ref`` (rad/s) with the generator's tangent."""
+        T0_, c_gen = gen.tangent(sg * g_ratio * om_ref) if on_grid else (0.0, 0.0)
+        sy = PiecewiseLinearSystem(asm0, om_ref / RPM, geometry=geo)
+        if c_gen:
+            sy.add_damping(i_gen, c_gen)  # the generator's tangent slip damping
+        sy.use_loads(cols)  # load values in, the turning load map followed exactly
+        return sy, T0_
+
     n_aero = int(math.ceil(t_end / aero_dt - 1e-9))
     n_steps = n_aero * m_sub
     runner = METHODS[method]
-    om_f = rotor_speed0_rpm * RPM  # reference speed and azimuth of the current freeze
+    om_f = rotor_speed0_rpm * RPM  # reference speed and azimuth at the last re-basing
     psi_f = math.radians(azimuth0_deg)
     t_f = 0.0
     x = np.zeros(2 * n)
     s = None
     on = bool(connected)
     cut_in = 0.0 if on else None
-    freeze_until = 0
-    system = None
-    T0 = 0.0
+    system, T0 = None, 0.0
     rows, Xs, Ss, events, segs = [], [], [], [], []
-    stats: dict = {"n_freezes": 0}
+    stats: dict = {"n_rebases": 0}
     prev = ld_next = None
-    az_grid, om_grid = np.zeros(n_steps + 1), np.zeros(n_steps + 1)  # reference carrier
+    az_grid = np.zeros(n_steps + 1)  # reference input azimuth (with the mounting) at each step
     for k in range(n_aero):
         t = k * aero_dt
         psi = psi_f + om_f * (t - t_f) + x[i_rot]
@@ -348,92 +340,53 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             u = u_now[None, :] + np.outer((tt - t) / aero_dt, u_now - prev)
         else:
             u = np.repeat(u_now[None, :], m_sub + 1, axis=0)
-        if not bending:
-            u = u.copy()
-            u[:, 1:] = 0.0  # no carrier translation to take the shaft-end force
         prev = u_now
-        drift = abs(om - om_f) > refreeze_speed * max(abs(om_f), 1e-3)
-        j = 0
-        while j < m_sub:
-            kk = k * m_sub + j  # gearbox step index
-            tj = kk * dt
-            # -- refreeze: rigid rotation into the reference; geometry, speed, generator
-            if system is None or kk >= freeze_until or (j == 0 and (switched or drift)):
-                phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
-                psi_f, om_f, t_f = psi_f + om_f * (tj - t_f) + phi, om_f + dom, tj
-                x[:n] -= r * phi
-                x[n:] -= r * dom
-                n_seg = max(1, int(math.radians(refreeze_deg) / max(abs(om_f) * dt, 1e-300)))
-                freeze_until = min(kk + n_seg, n_steps)
-                psi_mid = psi_f + om_f * dt * (freeze_until - kk) / 2 + mount
-                asm = geo.assemble(psi_mid)
-                T0, c_gen = gen.tangent(sg * g_ratio * om_f) if on else (0.0, 0.0)
-                if c_gen:
-                    asm.C = asm.C.copy()
-                    asm.C[i_gen, i_gen] += c_gen  # the generator's tangent damping
-                if system is not None:  # a closed segment's propagators are not needed again
-                    system.__dict__.pop("_exact_integrators", None)
-                prev_rho = getattr(system, "rho_bound", None)
-                system = PiecewiseLinearSystem(asm, om_f / RPM)
-                if prev_rho is not None and not (switched or drift):
-                    # a refreeze for the azimuth only turns the geometry: the spectrum moves
-                    # little, so the last bound serves (with taylor.RHO_MARGIN)
-                    system.rho_base = prev_rho
-                loads_j = {"rotor.torque": u[j, 0]}
+        kk = k * m_sub  # gearbox step index
+        # -- re-basing: rigid rotation into the reference; speed terms, generator tangent
+        if system is None or switched or abs(om - om_f) > rebase_speed * max(abs(om_f), 1e-3):
+            phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
+            psi_f, om_f, t_f = psi_f + om_f * (t - t_f) + phi, om_f + dom, t
+            x[:n] -= r * phi
+            x[n:] -= r * dom
+            system, T0 = reference(om_f, on)
+            if s is None:
+                # the drivetrain accelerating rigidly under the first loads, at the initial
+                # azimuth's geometry
+                loads0 = {"rotor.torque": u[0, 0], "generator.torque": -sg * T0}
                 if bending:
-                    loads_j.update({carrier_x: u[j, 1], carrier_y: u[j, 2]})
-                if s is None:
-                    # at the initial azimuth's exact geometry (the frozen segment with its
-                    # geometry correction reproduces it at t = 0)
-                    x[:n] = _accelerating_equilibrium(
-                        geo.assemble(psi_f + mount), r, om_f / RPM,
-                        {**loads_j, "generator.torque": -sg * T0})
-                    s = system.penetration(x) > 0
-                    s_init = s.copy()
-                else:
-                    s = reconcile(system, x, s, tj, events, psi_f + mount)
-                stats["n_freezes"] += 1
-                segs.append([kk, kk, system])
-                # first-order geometry correction on the static deflection, linear in time
-                # (exact under the first-order hold; QuasiStatic's docstring)
-                g_rate = np.zeros(n)
-                if geometry_rate and geo.exact:
-                    B_t = geo.load_map(psi_f + mount)[0]
-                    F_now = (B_t[:, j_rot] * u[j, 0] + B_t[:, j_fx] * u[j, 1]
-                             + B_t[:, j_fy] * u[j, 2] - sg * T0 * B_t[:, j_gen]
-                             + system.f_const)
-                    g_rate = -(geo.stiffness_rate(psi_mid) @ statics.static(system, s, F_now))
-                if load_cols is not None:
-                    # every force of this segment lies in the span of the loads' harmonic
-                    # columns, the centrifugal force and the geometry correction: exact
-                    # propagators with that input basis are several times cheaper
-                    system.set_inputs(np.column_stack([load_cols, asm.f_cent, g_rate]))
-            j_end = min(m_sub, freeze_until - k * m_sub)
-            Bt = geo.load_map(om_f * (tt[j:j_end + 1] - t_f) + psi_f + mount)
-            uj = u[j:j_end + 1]
-            F = (uj[:, :1] * Bt[:, :, j_rot] + uj[:, 1:2] * Bt[:, :, j_fx]
-                 + uj[:, 2:3] * Bt[:, :, j_fy] - sg * T0 * Bt[:, :, j_gen]
-                 + system.f_const[None, :]
-                 + np.outer(om_f * (tt[j:j_end + 1] - t_f) + psi_f + mount - psi_mid, g_rate))
-            # the row at kk was written by the previous segment (before the re-basing)
-            a0 = 0 if kk == 0 else 1
-            az_grid[kk + a0:k * m_sub + j_end + 1] = (om_f * (tt[j + a0:j_end + 1] - t_f)
-                                                      + psi_f + mount)
-            om_grid[kk + a0:k * m_sub + j_end + 1] = om_f
-            X, S, ev, st = runner(system, dt, j_end - j, F, x, s,
-                                  azimuth0=om_f * (tj - t_f) + psi_f + mount, **options)
-            events.append(_shift(ev, tj))
-            if not Ss:  # the initial state (the accelerating equilibrium)
-                Ss.append(S[:1])
-                Xs.append(X[:1])
-            Xs.append(X[1:])
-            Ss.append(S[1:])
-            x, s = X[-1].copy(), S[-1].copy()
-            segs[-1][1] = k * m_sub + j_end
-            j = j_end
-            for key, val in st.items():
-                if isinstance(val, (int, float)):
-                    stats[key] = stats.get(key, 0) + val
+                    loads0.update({names[2]: u[0, 1], names[3]: u[0, 2]})
+                x[:n] = _accelerating_equilibrium(geo.assemble(psi_f + mount), r, om_f / RPM,
+                                                  loads0)
+                s = system.penetration(x, psi_f + mount) > 0
+                s_init = s.copy()
+            else:
+                s = reconcile(system, x, s, t, events, psi_f + mount)
+                stats["n_rebases"] += 1
+            segs.append([kk, kk, system])
+        az0 = psi_f + om_f * (t - t_f) + mount
+        system.azimuth0 = az0
+        # load values: rotor torque, generator torque (its tangent's constant part), the
+        # shaft-end force in ground axes (zero when no carrier translation takes it), 1 for
+        # the centrifugal force
+        F = np.column_stack([u[:, 0], np.full(m_sub + 1, -sg * T0)]
+                            + ([u[:, 1], u[:, 2]] if bending else [])
+                            + [np.ones(m_sub + 1)])
+        a0 = 0 if kk == 0 else 1
+        az_grid[kk + a0:kk + m_sub + 1] = az0 + om_f * (tt[a0:] - t)
+        X, S, ev, st = runner(system, dt, m_sub, F, x, s, azimuth0=az0, **options)
+        ev = event_array([ev])
+        ev[:, 0] += t
+        events.append(ev)
+        if not Ss:  # the initial state (the accelerating equilibrium)
+            Ss.append(S[:1])
+            Xs.append(X[:1])
+        Xs.append(X[1:])
+        Ss.append(S[1:])
+        x, s = X[-1].copy(), S[-1].copy()
+        segs[-1][1] = kk + m_sub
+        for key, val in st.items():
+            if isinstance(val, (int, float)):
+                stats[key] = stats.get(key, 0) + val
         if not math.isfinite(om):
             raise ModelError("simulate_drivetrain", f"rotor speed not finite at t = {t:.3f} s")
         if progress is not None:
@@ -441,6 +394,9 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     X, S = np.concatenate(Xs), np.concatenate(Ss)
     events = event_array(events)
     t_grid = np.arange(n_steps + 1) * dt
+    # each segment's system starts at its first step's azimuth (the result's force tables)
+    for k0, _k1, sy in segs:
+        sy.azimuth0 = az_grid[k0]
     cpu = time.process_time() - cpu0
     clock["gearbox_s"] = cpu - clock["aero_s"] - clock["wind_s"] - clock["wind_setup_s"]
     stats.update(clock)
@@ -450,21 +406,14 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 "t_end": t_end, "dt": dt, "aero_dt": aero_dt, "aero_hold": aero_hold,
                 "rotor_speed0_rpm": rotor_speed0_rpm, "azimuth0_deg": azimuth0_deg,
                 "mounting_azimuth_deg": turbine.mounting_azimuth_deg,
-                "refreeze_deg": refreeze_deg, "refreeze_speed": refreeze_speed,
-                "method": method, "options": options,
+                "rebase_speed": rebase_speed, "method": method, "options": options,
                 "shaft_end_force": "on the carrier" if bending else "not modelled (the first "
                 "stage's carrier has no translation)",
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
-    sim = _result([tuple(sg_) for sg_ in segs], t_grid, X, S, events, s_init, stats,
-                  mesh_stiffness(segs[0][2], az_grid), settings)
-    # springs across turning frames at their exact geometry (not the segment's frozen rows)
+    sim = build_result([tuple(sg_) for sg_ in segs], t_grid, X, S, events, s_init, stats,
+                       mesh_stiffness(segs[0][2], az_grid), settings)
+    # elastic deflections: the rigid rotation (re-based at each re-basing) taken out
     Q, V = X[:, :n], X[:, n:]
-    Fs = geo.spring_forces(az_grid, om_grid, Q, V)
-    if Fs is not None:
-        sp = asm0.springs
-        for e, (el, ct) in enumerate(zip(sp.element, sp.contact, strict=True)):
-            sim.forces[f"{el}.{ct}"] = Fs[:, e]
-    # elastic deflections: the rigid rotation (re-based at each refreeze) taken out
     sim.q = pd.DataFrame(Q - np.outer(Q @ Mr / J, r), index=sim.q.index, columns=sim.q.columns)
     sim.v = pd.DataFrame(V - np.outer(V @ Mr / J, r), index=sim.v.index, columns=sim.v.columns)
     loads = pd.DataFrame(rows, columns=TURBINE_COLUMNS).set_index("time")

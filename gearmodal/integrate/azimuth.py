@@ -1,4 +1,5 @@
-"""Cheap refreezing of azimuth-dependent geometry (DESIGN 3.2, rotating geometry).
+"""Azimuth-dependent geometry as exact trigonometric polynomials (DESIGN 3.2, rotating
+geometry).
 
 A model whose frames turn against each other (a carrier against a fixed housing) assembles to
 matrices that depend on the input azimuth ``psi`` only through the frame rotations
@@ -9,12 +10,9 @@ of degree 2, and the stiffness ``sum k w w^T`` is of degree 4. :class:`AzimuthAs
 samples the assembly at ``2 D + 1`` equally spaced azimuths, takes their discrete Fourier
 coefficients (exact interpolation of a degree-``D`` trigonometric polynomial), checks the
 interpolant against a direct assembly at an azimuth off the sample grid, and then evaluates any
-azimuth for the cost of a few array sums instead of a full assembly. Models for which the check
-fails (other frame speed ratios) are assembled directly at every refreeze.
-
-:class:`QuasiStatic` gives the static deflection on which each frozen segment's first-order
-geometry correction acts (its docstring says why the correction is needed and how it is
-applied).
+azimuth for the cost of a few array sums instead of a full assembly. Its coefficients are the
+harmonics the exact method integrates (:mod:`gearmodal.integrate.periodic`); models for which
+the check fails (other frame speed ratios) are refused there with a clear error.
 """
 
 from __future__ import annotations
@@ -23,7 +21,6 @@ import dataclasses
 import math
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..assembly import Assembly
 
@@ -115,18 +112,6 @@ class AzimuthAssembler:
         return dataclasses.replace(t, **{f: v[f] for f in _FIELDS}, contacts=contacts,
                                    springs=springs, round=round_, azimuth=float(azimuth))
 
-    def stiffness_rate(self, azimuth: float) -> np.ndarray:
-        """``dK/dpsi`` at ``azimuth`` (N/m per rad): the derivative of the interpolant; by
-        central differences of direct assemblies when the interpolant is not exact."""
-        if not self.exact:
-            h = 1e-5
-            return (self.model.assemble(azimuth=azimuth + h).K
-                    - self.model.assemble(azimuth=azimuth - h).K) / (2 * h)
-        a, b = self.coef["K"]
-        hs = self.harmonics
-        return (np.tensordot(-hs * np.sin(hs * azimuth), a, axes=1)
-                + np.tensordot(hs * np.cos(hs * azimuth), b, axes=1))
-
     def spring_forces(self, azimuth: np.ndarray, rate: np.ndarray, Q: np.ndarray,
                       V: np.ndarray, chunk: int = 2000) -> np.ndarray | None:
         """Forces of the always-active springs at their exact geometry: ``k g + c g'`` with
@@ -161,77 +146,3 @@ class AzimuthAssembler:
         c = np.cos(np.outer(az, self.harmonics))
         s = np.sin(np.outer(az, self.harmonics))
         return np.tensordot(c, a, axes=1) + np.tensordot(s, b, axes=1)
-
-
-class QuasiStatic:
-    """Static deflections for the first-order geometry correction of a frozen segment.
-
-    A segment frozen at its middle azimuth ``psi_m`` holds ``K(psi_m)``; the true stiffness
-    ``K(psi(t))`` differs by ``K'(psi_m) (psi - psi_m)`` to first order. Springs across frames
-    turning against each other (the 600 kW carrier bearing between the rotating carrier and
-    the housing, which sags a millimetre on its suspension under the rotor weight) make that
-    difference act on large static deflections: left out, it rings the gearbox at the refreeze
-    rate (tens of kN on the 600 kW carrier bearing at 2 deg). The correction is applied as a
-    generalised force linear in time, exact under the first-order hold::
-
-        F_geo(t) = -K'(psi_m) q_st (psi(t) - psi_m)
-
-    on the segment's static deflection ``q_st`` (:meth:`static`), not on the moving state: a
-    correction on the state is a lagged stiffness that destabilises long segments (measured:
-    unstable at 4 deg), one on the static deflection is a feed-forward input that cannot. Its
-    error against the time-varying system integrated by ``solve_ivp`` is measured in
-    ``tests/validation/test_refreeze_geometry.py``.
-
-    The static problem is ``K_s q = F + f_s - M R (R^T M R)^-1 R^T (F + f_s)``, with ``R`` the
-    free (rigid-body) modes (d'Alembert: an accelerating drivetrain) and ``q`` M-orthogonal to
-    them, solved without the centripetal softening (Lin & Parker's ``-m Omega^2`` terms also
-    soften the free rotation, the centrifugal preload that balances them not being modelled,
-    which makes the problem nearly singular along it).
-    """
-
-    def __init__(self, free: np.ndarray, M: np.ndarray):
-        self.R = free
-        self.MR = M @ free
-        if free.shape[1]:
-            self.RtMR_inv = np.linalg.inv(free.T @ self.MR)
-            # basis of the complement of the free modes (Euclidean), for a regular solve
-            self.Q = np.linalg.qr(free, mode="complete")[0][:, free.shape[1]:]
-        else:
-            self.RtMR_inv = np.zeros((0, 0))
-            self.Q = np.eye(M.shape[0])
-
-    def _stiffness(self, system, s):
-        """``(Cholesky factor or None, f_s, condition estimate)`` of the reduced static
-        stiffness; the estimate ``(max/min diag L)^2`` is a lower bound of the condition
-        number, enough for the rule in :meth:`static`."""
-        K, _, f = system.matrices(s)
-        K = K - (system.K0 - system.asm.K)  # no centripetal softening (class docstring)
-        H = self.Q.T @ K @ self.Q
-        try:
-            L = np.linalg.cholesky(0.5 * (H + H.T))
-        except np.linalg.LinAlgError:
-            return None, f, np.inf
-        d = np.abs(np.diag(L))
-        return L, f, float((d.max() / max(d.min(), 1e-300)) ** 2)
-
-    def _solve(self, L, f, F):
-        g = F + f
-        g = g - self.MR @ (self.RtMR_inv @ (self.R.T @ g))
-        q = self.Q @ sla.cho_solve((L, True), self.Q.T @ g)
-        return q - self.R @ (self.RtMR_inv @ (self.MR.T @ q))
-
-    def static(self, system, s: np.ndarray, F: np.ndarray) -> np.ndarray:
-        """Static deflection of ``system`` under the generalised force ``F`` in contact state
-        ``s``; a state that holds the structure poorly (a gear free in its backlash: condition
-        above ``1e3`` times that of the nominal state) is replaced by the nominal state (front
-        flanks closed), which deflects the bearings and supports the same way. Zeros when
-        neither is regular."""
-        nominal = system.asm.contacts.nominal
-        Hn, fn, ref = self._stiffness(system, nominal)
-        if not np.array_equal(s, nominal):
-            H, f, cond = self._stiffness(system, s)
-            if H is not None and cond <= 1e3 * ref:
-                return self._solve(H, f, F)
-        if Hn is not None and ref < 1e14:
-            return self._solve(Hn, fn, F)
-        return np.zeros(len(F))

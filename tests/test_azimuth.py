@@ -1,11 +1,11 @@
-"""Cheap refreezing: the trigonometric azimuth interpolant equals direct assembly, and the
+"""The trigonometric azimuth interpolant equals direct assembly, and the
 spectral bound used for the propagation levels bounds the true spectral radius."""
 
 import numpy as np
 import pytest
 
 import gearmodal as gm
-from gearmodal.integrate.refreeze import AzimuthAssembler
+from gearmodal.integrate.azimuth import AzimuthAssembler
 from gearmodal.integrate.system import PiecewiseLinearSystem
 
 FIELDS = ("M", "C", "K", "G", "K_cent", "f_cent", "B")
