@@ -9,8 +9,8 @@ The case is the double-contact study's ``clearance`` gearbox (``studies/double_c
 the 600 kW turbine scene ``studies/scenes/600kw_turbine_10ms.toml``, 10 m/s TI 0.12 wind,
 seed 1, carrier bearing 1e8 N/m with 1 mm clearance per axis), 30 s from 6 rpm through cut-in
 (``--quick``: 15 s). Each rung changes one setting of the most detailed rung, ``reference``
-(geometry refrozen every 0.125 deg, output/propagation step 1 ms, ``method="exact"``: the
-scene's own settings since this benchmark showed coarser ones to be wrong), through
+(output step 1 ms, ``method="exact"``, the turning geometry integrated exactly: the scene's
+own settings), through
 the scene overrides of :func:`gearmodal.sweep` (cases stored in ``DIR/store``: an interrupted
 run resumes, a rerun with more rungs reuses the finished ones).
 
@@ -33,7 +33,7 @@ only) and cannot run the turbine case (its start is a static equilibrium, and an
 solver would need microsecond steps over 30 s); its comparison with the polygon is made on the
 planetary stage alone (``benchmarks/clearance_shape.py``).
 ``--auto TOL`` runs ``method = "auto"`` (:func:`gearmodal.choose_fidelity`) on the same case
-instead of the rungs: the step ladder from 4x the reference's refreeze angle and ``dt`` down,
+instead of the rungs: the step ladder from 4x the reference's ``dt`` down,
 until a rung agrees within ``TOL`` with the next two finer ones (``DIR/auto.csv``).
 
 The rung ``mesh_alternating`` makes every mesh's stiffness alternate between single and
@@ -68,7 +68,7 @@ from gearmodal.studies import summarize  # noqa: E402
 SCENE = ROOT / "studies" / "scenes" / "600kw_turbine_10ms.toml"
 QUANTITIES = ("max_front_force_N", "max_planet_bearing_force_N", "double_contact_time_s",
               "peak_load_sharing_factor")
-REFERENCE = {"turbine.refreeze_deg": 0.125, "scene.dt": 1e-3}
+REFERENCE = {"scene.dt": 1e-3}
 #: the 600 kW model file's carrier bearing in the directions only the full level has
 #: (z in N/m, rx and ry in N m/rad; studies/models/600kw.toml)
 CARRIER_TILT = {k: v for k, v in tomllib.loads(
@@ -87,23 +87,17 @@ def rungs(quick: bool) -> list[tuple[str, str, str, dict]]:
     """(rung, knob, setting, overrides on top of the reference)."""
     from double_contact import CLEARANCE
 
-    out = [("reference", "-", "refreeze 0.125 deg, dt 1 ms, exact (Taylor)", {}),
+    out = [("reference", "-", "dt 1 ms, exact (Taylor, turning geometry exact)", {}),
            ("floor", "chaos floor", "rotor speed at start x (1 + 1e-13)",
             {"turbine.rotor_speed0_rpm": 6.0 * (1 + 1e-13)})]
-    if not quick:  # finer than the reference: is it converged?
-        out.append(("refreeze_0.0625", "refreeze_deg", "0.0625 deg, dt 0.5 ms",
-                    {"turbine.refreeze_deg": 0.0625, "scene.dt": 5e-4}))
-    for deg in ((0.5, 1.0, 2.0) if quick else (0.25, 0.5, 1.0, 2.0, 4.0)):
-        out.append((f"refreeze_{deg:g}", "refreeze_deg", f"{deg:g} deg",
-                    {"turbine.refreeze_deg": deg}))
-    for dt in ((2e-3,) if quick else (2e-3, 4e-3)):
+    # the output step samples the peaks and holds the aerodynamic loads' interpolation; the
+    # exact method finds every event whatever it is
+    for dt in ((5e-4, 2e-3) if quick else (5e-4, 2e-3, 4e-3)):
         out.append((f"dt_{dt * 1e3:g}ms", "dt", f"{dt * 1e3:g} ms", {"scene.dt": dt}))
     out.append(("newmark", "method", "newmark, dt 1 ms", {"scene.method": "newmark"}))
     if not quick:
         out.append(("newmark_0.25ms", "method", "newmark, dt 0.25 ms",
                     {"scene.method": "newmark", "scene.dt": 2.5e-4}))
-    out.append(("old_default", "the scene's settings before 2026-11-21",
-                "refreeze 1 deg, dt 2 ms", {"turbine.refreeze_deg": 1.0, "scene.dt": 2e-3}))
     for facets, ramps in (((16, 4),) if quick else ((16, 1), (16, 4), (32, 4))):
         out.append((f"clearance_polygon{facets}x{ramps}", "carrier clearance shape",
                     f"round by {facets} facets x {ramps} ramps (per-axis dead band in the "

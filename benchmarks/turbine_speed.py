@@ -1,27 +1,31 @@
-"""The coupled 600 kW turbine + gearbox: speed and the error of its multirate and refreeze knobs.
+"""The coupled 600 kW turbine + gearbox: speed, its floor, and the error of the multirate knob.
 
 Usage::
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/turbine_speed.py [--quick] --out DIR
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/turbine_speed.py [--quick] --out DIR \
+        [--baseline PATH]
 
-Writes ``DIR/turbine_speed.csv`` with one row per run: ``study``, ``setting``, ``cpu_s``,
-``realtime_ratio`` (simulated s per CPU s, the turbulence box excluded), ``aero_s``,
-``wind_s``, ``wind_setup_s``, ``gearbox_s``, ``n_events``, ``n_freezes`` and, for the error
-studies, ``error_N``: the largest difference after the first 0.5 s of the planet-1 ring and sun
-front-flank forces and the carrier-bearing force against the study's reference run.
+Writes ``DIR/turbine_speed.csv`` with one row per run: ``study``, ``gearbox``, ``setting``,
+``cpu_s``, ``realtime_ratio`` (simulated s per CPU s, the turbulence box excluded),
+``aero_s``, ``wind_s``, ``gearbox_s``, ``n_events``, ``pieces`` (Taylor pieces summed),
+``pieces_per_s`` (per simulated second), ``us_per_piece`` (gearbox CPU per piece),
+``root_searches``, the planet-1 tooth-force and planet-bearing peaks (``max_front_force_N``,
+``max_planet_bearing_force_N``) and, for the accuracy and multirate studies, ``error``: the
+largest relative difference of those peaks (accuracy) or of the planet-1 flank and
+carrier-bearing forces (multirate, N) against the study's reference run.
 
 Studies:
 
-- ``speed``: start-up in 10 m/s turbulent wind (TI 0.12, seed 1) from 6 rpm through cut-in,
-  the scene ``studies/scenes/600kw_turbine_10ms.toml`` at its settings (``--quick``: 16 s).
-- ``multirate``: on the grid at 22.3 rpm in the same wind, 2 s: aerodynamic step 0.02 s with
-  the loads interpolated / held / extrapolated, and 0.05 s, against aerodynamics at every
-  gearbox step (``aero_dt = dt``).
-- ``refreeze``: the same run with the geometry refrozen every 5, 2, 1, 0.5 deg against 0.25
-  deg at dt = 1 ms.
-
-``realtime_ratio`` leaves out the one-off turbulence box (``wind_setup_s``, PyConTurb), built
-in the ``speed`` run.
+- ``speed``: the scene ``studies/scenes/600kw_turbine_10ms.toml`` (start-up in 10 m/s
+  turbulent wind from 6 rpm through cut-in; ``--quick``: 10 s) with the ``reference`` gearbox
+  and the ``clearance`` gearbox of the double-contact study, at the scene's settings.
+- ``accuracy``: the same runs at half the output step: the peaks' relative change.
+- ``baseline`` (with ``--baseline PATH``, a checkout of the commit before the exact turning
+  geometry): the same two runs by that code at its converged refreeze setting (the scene file
+  of that checkout: 0.125 deg at 1 ms), back to back in the same session; ``speedup`` is the
+  ratio of its CPU time to this code's.
+- ``multirate``: on the grid at 22.3 rpm, 2 s: the aerodynamic step 0.02 s with the loads
+  interpolated / held / extrapolated, and 0.05 s, against aerodynamics at every gearbox step.
 
 Process time on one core; the numba kernels are compiled (and cached) by a warm-up run first.
 """
@@ -29,7 +33,9 @@ Process time on one core; the numba kernels are compiled (and cached) by a warm-
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -37,27 +43,62 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "studies"))
 
 import pandas as pd  # noqa: E402
 
 import gearmodal as gm  # noqa: E402
 from gearmodal.scene import load_scene  # noqa: E402
+from gearmodal.studies import summarize  # noqa: E402
 from gearmodal.turbine import simulate_drivetrain  # noqa: E402
 
+SCENE = "studies/scenes/600kw_turbine_10ms.toml"
 COLUMNS = ["stage1.ring_planet1.front", "stage1.sun_planet1.front", "stage1.carrier_bearing.x",
            "stage1.carrier_bearing.y"]
+PEAKS = ("max_front_force_N", "max_planet_bearing_force_N")
+
+#: one run of a checkout's code on the scene, in a subprocess (the baseline)
+_CHILD = r"""
+import json, sys, time
+sys.path.insert(0, sys.argv[1])
+from gearmodal.scene import load_scene
+from gearmodal.studies import summarize
+from gearmodal.turbine import simulate_drivetrain
+over = json.loads(sys.argv[2])
+sc = load_scene(sys.argv[1] + "/" + sys.argv[3], over)
+simulate_drivetrain(sc.turbine, sc.wind, sc.model, 0.1, **sc.drivetrain)  # compile
+t = time.process_time()
+res = simulate_drivetrain(sc.turbine, sc.wind, sc.model, sc.t_end, dt=sc.dt, **sc.drivetrain)
+cpu = time.process_time() - t
+sm = summarize(res)
+print(json.dumps({"cpu_s": cpu, "realtime_ratio": res.stats["realtime_ratio"],
+                  "gearbox_s": res.stats["gearbox_s"], "n_events": res.stats["n_events"],
+                  "max_front_force_N": sm["max_front_force_N"],
+                  "max_planet_bearing_force_N": sm["max_planet_bearing_force_N"],
+                  "settings": {k: v for k, v in sc.drivetrain.items()}}))
+"""
 
 
-def _row(study, setting, res, cpu, error=float("nan")):
+def gearboxes() -> dict:
+    from double_contact import CLEARANCE
+
+    return {"reference": {}, "clearance": {"model.stages.0.carrier_bearing": CLEARANCE}}
+
+
+def _row(study, gearbox, setting, res, cpu, t_sim, error=float("nan")):
     st = res.stats
-    return {"study": study, "setting": setting, "cpu_s": cpu,
+    sm = summarize(res)
+    pieces = st.get("pieces", 0)
+    return {"study": study, "gearbox": gearbox, "setting": setting, "cpu_s": cpu,
             "realtime_ratio": st["realtime_ratio"], "aero_s": st["aero_s"],
-            "wind_s": st["wind_s"], "wind_setup_s": st["wind_setup_s"],
-            "gearbox_s": st["gearbox_s"], "n_events": st["n_events"],
-            "n_freezes": st["n_freezes"], "error_N": error}
+            "wind_s": st["wind_s"], "gearbox_s": st["gearbox_s"], "n_events": st["n_events"],
+            "pieces": pieces, "pieces_per_s": pieces / t_sim,
+            "us_per_piece": 1e6 * st["gearbox_s"] / max(pieces, 1),
+            "root_searches": st.get("root_searches", 0),
+            **{k: sm[k] for k in PEAKS}, "error": error}
 
 
-def _error(res, ref) -> float:
+def _force_error(res, ref) -> float:
     a = res.gearbox.forces[COLUMNS]
     b = ref.gearbox.forces[COLUMNS].reindex(a.index, method="nearest")
     d = (a - b)[a.index > 0.5]
@@ -68,44 +109,69 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--out", required=True)
+    ap.add_argument("--baseline", help="checkout of the refreeze code to time back to back")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    scene = load_scene(ROOT / "studies/scenes/600kw_turbine_10ms.toml")
-    tb, gb = scene.turbine, scene.model
-    t_start = 16.0 if args.quick else scene.t_end
-    fields = {k: v for k, v in vars(scene.wind).items() if not k.startswith("_")}
-    wind = gm.turbine.Wind(**{**fields, "duration": max(t_start, 3.0) + 1.0})
+    t_sim = 10.0 if args.quick else None
     rows = []
 
-    def run(t_end, **kw):
-        t = time.process_time()
-        res = simulate_drivetrain(tb, wind, gb, t_end, **kw)
-        return res, time.process_time() - t
+    def save():
+        pd.DataFrame(rows).to_csv(out / "turbine_speed.csv", index=False)
 
-    simulate_drivetrain(tb, gm.turbine.Wind(mean_speed=10.0), gb, 0.1, rotor_speed0_rpm=22.3,
-                        connected=True)  # numba compile (cached)
-    res, cpu = run(t_start, dt=scene.dt, **scene.drivetrain)  # builds box
-    rows.append(_row("speed", f"start-up {t_start:g} s, dt {scene.dt:g} s", res, cpu))
-    print(rows[-1], flush=True)
+    sc0 = load_scene(ROOT / SCENE)
+    simulate_drivetrain(sc0.turbine, gm.turbine.Wind(mean_speed=10.0), sc0.model, 0.1,
+                        rotor_speed0_rpm=22.3, connected=True)  # numba compile (cached)
+    for name, over in gearboxes().items():
+        over = {**over, **({"scene.t_end": t_sim} if t_sim else {})}
+        sc = load_scene(ROOT / SCENE, over)
+        runs = {}
+        for label, dt in (("scene", sc.dt), ("half step", sc.dt / 2)):
+            t = time.process_time()
+            res = simulate_drivetrain(sc.turbine, sc.wind, sc.model, sc.t_end, dt=dt,
+                                      **sc.drivetrain)
+            runs[label] = (res, time.process_time() - t)
+        res, cpu = runs["scene"]
+        rows.append(_row("speed", name, f"{sc.t_end:g} s, dt {sc.dt:g} s", res, cpu, sc.t_end))
+        a, b = summarize(res), summarize(runs["half step"][0])
+        err = max(abs(a[k] - b[k]) / abs(b[k]) for k in PEAKS)
+        rows.append(_row("accuracy", name, f"dt {sc.dt / 2:g} s (half step)",
+                         runs["half step"][0], runs["half step"][1], sc.t_end, err))
+        print(rows[-2], rows[-1], sep="\n", flush=True)
+        save()
+        if args.baseline:
+            base = Path(args.baseline).resolve()
+            r = subprocess.run([sys.executable, "-c", _CHILD, str(base), json.dumps(over), SCENE],
+                               capture_output=True, text=True, check=True,
+                               env={**os.environ, "PYTHONPATH": str(base)})
+            got = json.loads(r.stdout.strip().splitlines()[-1])
+            rows.append({"study": "baseline", "gearbox": name,
+                         "setting": "refreeze code at its scene settings "
+                                    + json.dumps(got.pop("settings")),
+                         **got, "speedup": got["cpu_s"] / cpu})
+            print(rows[-1], flush=True)
+            save()
     on = {"rotor_speed0_rpm": 22.3, "connected": True}
     t2 = 1.5 if args.quick else 2.0
-    ref, cpu = run(t2, dt=2e-3, aero_dt=2e-3, **on)
-    rows.append(_row("multirate", "aero every gearbox step (2 ms)", ref, cpu, 0.0))
+    tb, gb = sc0.turbine, sc0.model
+    wind = gm.turbine.Wind(**{**{k: v for k, v in vars(sc0.wind).items()
+                                  if not k.startswith("_")}, "duration": 4.0})
+
+    def run(**kw):
+        t = time.process_time()
+        res = simulate_drivetrain(tb, wind, gb, t2, **kw)
+        return res, time.process_time() - t
+
+    ref, cpu = run(dt=2e-3, aero_dt=2e-3, **on)
+    rows.append(_row("multirate", "reference", "aero every gearbox step (2 ms)", ref, cpu, t2,
+                     0.0))
     for hold, adt in (("interpolate", 0.02), ("hold", 0.02), ("linear", 0.02),
                       ("interpolate", 0.05)):
-        res, cpu = run(t2, dt=2e-3, aero_dt=adt, aero_hold=hold, **on)
-        rows.append(_row("multirate", f"aero {adt:g} s {hold}", res, cpu, _error(res, ref)))
-        print(rows[-1], flush=True)
-    ref, cpu = run(t2, dt=1e-3, aero_dt=0.02, refreeze_deg=0.25, **on)
-    rows.append(_row("refreeze", "0.25 deg, dt 1 ms", ref, cpu, 0.0))
-    for deg in (0.5, 1.0, 2.0, 5.0):
-        res, cpu = run(t2, dt=1e-3, aero_dt=0.02, refreeze_deg=deg, **on)
-        rows.append(_row("refreeze", f"{deg:g} deg, dt 1 ms", res, cpu, _error(res, ref)))
-        print(rows[-1], flush=True)
-    df = pd.DataFrame(rows)
-    df.to_csv(out / "turbine_speed.csv", index=False)
-    print(df.to_string(index=False))
+        res, cpu = run(dt=2e-3, aero_dt=adt, aero_hold=hold, **on)
+        rows.append(_row("multirate", "reference", f"aero {adt:g} s {hold}", res, cpu, t2,
+                         _force_error(res, ref)))
+    save()
+    print(pd.DataFrame(rows).to_string(index=False))
     return 0
 
 

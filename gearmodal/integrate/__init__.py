@@ -21,19 +21,15 @@ from ..assembly import Assembly
 from ..errors import ModelError
 from ..model.model import Model
 from .azimuth import AzimuthAssembler
-from .exact import run_exact
-from .newmark import run_newmark
+from .driver import METHODS, Driver, Method, get_method
 from .result import EVENT_COLUMNS, SimulationResult
-from .scipy_ref import run_scipy
 from .system import PiecewiseLinearSystem
 
 #: pandas 3 has a string dtype of its own ("str"); pandas 2 keeps labels as objects
 _PANDAS_3 = int(pd.__version__.split(".")[0]) >= 3
 
-METHODS = {"exact": run_exact, "newmark": run_newmark, "scipy": run_scipy}
-
-__all__ = ["METHODS", "OPTIONS", "SimulationResult", "build_result", "check_options",
-           "event_array", "reconcile", "simulate"]
+__all__ = ["METHODS", "Driver", "Method", "SimulationResult", "build_result", "event_array",
+           "get_method", "reconcile", "simulate"]
 
 
 def _load_grid(asm: Assembly, loads, t: np.ndarray) -> np.ndarray:
@@ -86,21 +82,6 @@ def rotating_geometry(model: Model) -> bool:
     return not same
 
 
-#: the options each method takes (``simulate(..., **options)``); anything else is refused
-OPTIONS = {"exact": ("max_events_per_step", "propagator"),
-           "newmark": (),
-           "scipy": ("scipy_method", "rtol", "atol", "max_events", "max_step", "first_step")}
-
-
-def check_options(method: str, options: dict) -> None:
-    """Refuse an option ``method`` does not take, naming it and the ones it does."""
-    for key in options:
-        if key not in OPTIONS[method]:
-            allowed = ", ".join(OPTIONS[method]) or "none"
-            raise ModelError(key, f"is not an option of method={method!r} (its options: "
-                             f"{allowed})")
-
-
 class _Reduced:
     """A coupled model assembled and reduced to its independent coordinates at any azimuth
     (the turning geometry of a coupled system)."""
@@ -150,9 +131,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     >>> sim.events[["element", "contact", "state_after"]].head(2).values.tolist()
     [['mesh', 'front', 'closed'], ['mesh', 'front', 'open']]
     """
-    if method not in METHODS:
-        raise ModelError("method", f"= {method!r}: must be one of {', '.join(map(repr, METHODS))}")
-    check_options(method, options)
+    get_method(method, options)  # the name and its options checked
     for label, val in (("t_end", t_end), ("dt", dt)):
         if not isinstance(val, (int, float)) or isinstance(val, bool) or not math.isfinite(val) \
                 or val <= 0:
@@ -198,11 +177,12 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         F = np.column_stack([U[:, used], np.ones(len(t))])
     else:
         F = U @ asm.B.T + system.f_const[None, :]
-    X, S, ev, st = METHODS[method](system, dt, n_steps, F, x, s, azimuth0=0.0, **options)
-    events = event_array([ev])
-    stats = {**{k: v for k, v in st.items() if isinstance(v, (int, float))},
-             "cpu_s": time.process_time() - cpu, "n_events": len(events), "n_steps": n_steps}
-    result = build_result([(0, n_steps, system)], t, X, S, events, s_init, stats,
+    run = Driver(method, dt, x, s, **options)
+    run.advance(system, n_steps, F, azimuth0=0.0)
+    X, S, events = run.arrays()
+    stats = {**run.stats, "cpu_s": time.process_time() - cpu, "n_events": len(events),
+             "n_steps": n_steps}
+    result = build_result([tuple(sg) for sg in run.segments], t, X, S, events, s_init, stats,
                      mesh_stiffness(system, omega * t),
                      {"model": name, "method": method, "t_end": t_end, "dt": dt,
                       "speed_rpm": speed_rpm, "options": options,

@@ -53,7 +53,7 @@ def run_newmark(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: 
         return cache[key]
 
     def load_at(k):
-        return system.generalized_force(k * dt, F_grid[k])
+        return system.generalized_force(F_grid[k], azimuth(k))
 
     K, C, f, lu = mats(s, 0)
     a = np.linalg.solve(M, load_at(0) + f - C @ v - K @ q)

@@ -74,7 +74,7 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             u = F_grid[k] * (1 - w) + F_grid[k + 1] * w
             if turning:  # the time-varying system at this instant's azimuth
                 A, f = system.first_order(s, ks, system.at(azimuth(ti)))
-            F = system.generalized_force(ti, u) + f
+            F = system.generalized_force(u, azimuth(ti)) + f
             if rd.nr:
                 F = F + rd.force(xx, sr)
             out = A @ xx

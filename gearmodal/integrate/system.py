@@ -129,14 +129,14 @@ class PiecewiseLinearSystem:
             self.GT = np.zeros((1, 0, 0), dtype=complex)
         self.load_columns = (list(columns), constant)
 
-    def generalized_force(self, t: float, u: np.ndarray) -> np.ndarray:
-        """The generalised force (n,) at time ``t`` (s from the run's start, azimuth
-        ``azimuth0 + omega t``) of one row ``u`` of the force grid: the load values when
-        :meth:`use_loads` was called (the load map at that azimuth), else ``u`` itself."""
+    def generalized_force(self, u: np.ndarray, azimuth: float) -> np.ndarray:
+        """The generalised force (n,) of one row ``u`` of the force grid at input ``azimuth``
+        (rad): the load values when :meth:`use_loads` was called (the load map at that
+        azimuth), else ``u`` itself."""
         if self.load_columns is None:
             return u
         cols, constant = self.load_columns
-        B = self.at(self.azimuth0 + self.omega * t)["B"][:, cols]
+        B = self.at(azimuth)["B"][:, cols]
         F = B @ u[:len(cols)]
         return F + self.f_const * u[-1] if constant else F
 

@@ -57,15 +57,7 @@ import pandas as pd
 import scipy.linalg as sla
 
 from ..errors import ModelError
-from ..integrate import (
-    METHODS,
-    SimulationResult,
-    build_result,
-    check_options,
-    event_array,
-    mesh_stiffness,
-    reconcile,
-)
+from ..integrate import Driver, SimulationResult, build_result, get_method, mesh_stiffness
 from ..integrate.azimuth import AzimuthAssembler
 from ..integrate.system import PiecewiseLinearSystem
 from ..static import equilibrium
@@ -228,9 +220,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         raise ModelError("aero_dt", f"= {aero_dt!r}: must be a whole multiple of dt = {dt!r}")
     if aero_hold not in HOLDS:
         raise ModelError("aero_hold", f"= {aero_hold!r}: must be one of {HOLDS}")
-    if method not in METHODS:
-        raise ModelError("method", f"= {method!r}: must be one of {', '.join(METHODS)}")
-    check_options(method, options)
+    get_method(method, options)  # the name and its options checked
     if not (isinstance(rotor_speed0_rpm, (int, float)) and rotor_speed0_rpm >= 0):
         raise ModelError("rotor_speed0_rpm", f"= {rotor_speed0_rpm!r}: must be >= 0 rpm")
     if wind.turbulence_intensity > 0 and wind.duration < t_end:
@@ -284,10 +274,15 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         clock["aero_s"] += time.process_time() - tv
         return out
 
-    def reference(om_ref, on_grid):
-        """The gearbox system turning at ``om_ref`` (rad/s) with the generator's tangent."""
+    def reference(om_ref, on_grid, rho=None):
+        """The gearbox system turning at ``om_ref`` (rad/s) with the generator's tangent;
+        ``rho``: the spectral bound of the last system, reused when only the speed drifted
+        (by ``rebase_speed``: the speed terms are soft against the meshes; the integrator adds
+        a margin, and the series' tail check halves any piece it makes too long)."""
         T0_, c_gen = gen.tangent(sg * g_ratio * om_ref) if on_grid else (0.0, 0.0)
         sy = PiecewiseLinearSystem(asm0, om_ref / RPM, geometry=geo)
+        if rho is not None:
+            sy.rho_base = rho
         if c_gen:
             sy.add_damping(i_gen, c_gen)  # the generator's tangent slip damping
         sy.use_loads(cols)  # load values in, the turning load map followed exactly
@@ -295,7 +290,6 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
 
     n_aero = int(math.ceil(t_end / aero_dt - 1e-9))
     n_steps = n_aero * m_sub
-    runner = METHODS[method]
     om_f = rotor_speed0_rpm * RPM  # reference speed and azimuth at the last re-basing
     psi_f = math.radians(azimuth0_deg)
     t_f = 0.0
@@ -304,7 +298,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     on = bool(connected)
     cut_in = 0.0 if on else None
     system, T0 = None, 0.0
-    rows, Xs, Ss, events, segs = [], [], [], [], []
+    rows = []
+    run = None  # the integration Driver, from the start state on
     stats: dict = {"n_rebases": 0}
     prev = ld_next = None
     az_grid = np.zeros(n_steps + 1)  # reference input azimuth (with the mounting) at each step
@@ -348,7 +343,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             psi_f, om_f, t_f = psi_f + om_f * (t - t_f) + phi, om_f + dom, t
             x[:n] -= r * phi
             x[n:] -= r * dom
-            system, T0 = reference(om_f, on)
+            rho = None if system is None or switched else system.rho_bound
+            system, T0 = reference(om_f, on, rho)
             if s is None:
                 # the drivetrain accelerating rigidly under the first loads, at the initial
                 # azimuth's geometry
@@ -358,13 +354,11 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 x[:n] = _accelerating_equilibrium(geo.assemble(psi_f + mount), r, om_f / RPM,
                                                   loads0)
                 s = system.penetration(x, psi_f + mount) > 0
-                s_init = s.copy()
+                run = Driver(method, dt, x, s, **options)
             else:
-                s = reconcile(system, x, s, t, events, psi_f + mount)
+                run.rebase(system, x, psi_f + mount)
                 stats["n_rebases"] += 1
-            segs.append([kk, kk, system])
         az0 = psi_f + om_f * (t - t_f) + mount
-        system.azimuth0 = az0
         # load values: rotor torque, generator torque (its tangent's constant part), the
         # shaft-end force in ground axes (zero when no carrier translation takes it), 1 for
         # the centrifugal force
@@ -373,30 +367,16 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                             + [np.ones(m_sub + 1)])
         a0 = 0 if kk == 0 else 1
         az_grid[kk + a0:kk + m_sub + 1] = az0 + om_f * (tt[a0:] - t)
-        X, S, ev, st = runner(system, dt, m_sub, F, x, s, azimuth0=az0, **options)
-        ev = event_array([ev])
-        ev[:, 0] += t
-        events.append(ev)
-        if not Ss:  # the initial state (the accelerating equilibrium)
-            Ss.append(S[:1])
-            Xs.append(X[:1])
-        Xs.append(X[1:])
-        Ss.append(S[1:])
-        x, s = X[-1].copy(), S[-1].copy()
-        segs[-1][1] = kk + m_sub
-        for key, val in st.items():
-            if isinstance(val, (int, float)):
-                stats[key] = stats.get(key, 0) + val
+        run.advance(system, m_sub, F, azimuth0=az0)
+        x = run.x.copy()
         if not math.isfinite(om):
             raise ModelError("simulate_drivetrain", f"rotor speed not finite at t = {t:.3f} s")
         if progress is not None:
             progress(k + 1, n_aero)
-    X, S = np.concatenate(Xs), np.concatenate(Ss)
-    events = event_array(events)
+    X, S, events = run.arrays()
+    segs = run.segments
+    stats.update(run.stats)
     t_grid = np.arange(n_steps + 1) * dt
-    # each segment's system starts at its first step's azimuth (the result's force tables)
-    for k0, _k1, sy in segs:
-        sy.azimuth0 = az_grid[k0]
     cpu = time.process_time() - cpu0
     clock["gearbox_s"] = cpu - clock["aero_s"] - clock["wind_s"] - clock["wind_setup_s"]
     stats.update(clock)
@@ -410,7 +390,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 "shaft_end_force": "on the carrier" if bending else "not modelled (the first "
                 "stage's carrier has no translation)",
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
-    sim = build_result([tuple(sg_) for sg_ in segs], t_grid, X, S, events, s_init, stats,
+    sim = build_result([tuple(sg_) for sg_ in segs], t_grid, X, S, events, run.s0, stats,
                        mesh_stiffness(segs[0][2], az_grid), settings)
     # elastic deflections: the rigid rotation (re-based at each re-basing) taken out
     Q, V = X[:, :n], X[:, n:]

@@ -1,0 +1,147 @@
+"""One integration driver and the methods behind it (DESIGN 3.2; as scipy's ``OdeSolver``
+subclasses behind ``solve_ivp``).
+
+A run is walked through **segments**: intervals over which the system's coefficients are
+known functions of time (the whole run for :func:`gearmodal.simulate` at constant speed; the
+stretch between two re-basings of the reference rotation for the turbine, advanced one
+aerodynamic step at a time with its loads). :class:`Driver` calls the chosen :class:`Method`
+on each stretch, keeps the states, logs every event in one format (rows ``time, contact,
+before, after, rate, force``, times from the run's start) and builds one
+:class:`~gearmodal.integrate.result.SimulationResult`. The turbine co-simulation is a source of
+segments and loads for it, not a second loop.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..errors import ModelError
+from .exact import run_exact
+from .newmark import run_newmark
+from .scipy_ref import run_scipy
+from .system import PiecewiseLinearSystem
+
+
+class Method:
+    """An integration method: ``run(system, dt, n_steps, F, x0, s0, azimuth0=0.0,
+    **options)`` returns ``(X, S, events, stats)`` (states and contact states at the
+    ``n_steps + 1`` output times, events as rows or tuples, counters); ``options`` are the
+    names it takes."""
+
+    name = ""
+    options: tuple[str, ...] = ()
+    _run = None
+
+    def run(self, system: PiecewiseLinearSystem, dt: float, n_steps: int, F: np.ndarray,
+            x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0, **options):
+        return type(self)._run(system, dt, n_steps, F, x0, s0, azimuth0=azimuth0, **options)
+
+    def check(self, options: dict) -> None:
+        """Refuse an option this method does not take, naming it and the ones it does."""
+        for key in options:
+            if key not in self.options:
+                allowed = ", ".join(self.options) or "none"
+                raise ModelError(key, f"is not an option of method={self.name!r} (its options: "
+                                 f"{allowed})")
+
+
+class Exact(Method):
+    """Event-driven exact propagation (:func:`gearmodal.integrate.exact.run_exact`)."""
+
+    name = "exact"
+    options = ("max_events_per_step", "propagator")
+    _run = staticmethod(run_exact)
+
+
+class Newmark(Method):
+    """Newmark average acceleration (:func:`gearmodal.integrate.newmark.run_newmark`)."""
+
+    name = "newmark"
+    options = ()
+    _run = staticmethod(run_newmark)
+
+
+class Scipy(Method):
+    """``solve_ivp`` with event functions (:func:`gearmodal.integrate.scipy_ref.run_scipy`)."""
+
+    name = "scipy"
+    options = ("scipy_method", "rtol", "atol", "max_events", "max_step", "first_step")
+    _run = staticmethod(run_scipy)
+
+
+#: the methods by name
+METHODS: dict[str, Method] = {m.name: m for m in (Exact(), Newmark(), Scipy())}
+
+
+def get_method(name: str, options: dict) -> Method:
+    """The method called ``name``, its ``options`` checked."""
+    if name not in METHODS:
+        raise ModelError("method", f"= {name!r}: must be one of {', '.join(map(repr, METHODS))}")
+    m = METHODS[name]
+    m.check(options)
+    return m
+
+
+class Driver:
+    """Walks one run through its segments (module docstring).
+
+    Parameters
+    ----------
+    name : the method's name; options : its options (checked).
+    dt : output step, s. x0, s0 : the state and contact state at time 0.
+    """
+
+    def __init__(self, name: str, dt: float, x0: np.ndarray, s0: np.ndarray, **options):
+        self.method = get_method(name, options)
+        self.options = options
+        self.dt = float(dt)
+        self.x = np.array(x0, dtype=float)
+        self.s = np.array(s0, dtype=bool)
+        self.s0 = self.s.copy()
+        self.k = 0  # output steps done
+        self.segments: list[list] = []  # [k0, k1, system] with the system of each stretch
+        self._X, self._S, self._events = [self.x[None]], [self.s[None]], []
+        self.stats: dict = {}
+        self.cpu = 0.0
+
+    def advance(self, system: PiecewiseLinearSystem, n_steps: int, F: np.ndarray,
+                azimuth0: float = 0.0) -> None:
+        """Advance ``n_steps`` output steps with ``system`` and the force grid ``F``
+        (``n_steps + 1`` rows), the input azimuth ``azimuth0`` (rad) at the first."""
+        t0 = time.process_time()
+        X, S, ev, st = self.method.run(system, self.dt, n_steps, F, self.x, self.s,
+                                       azimuth0=azimuth0, **self.options)
+        ev = np.array(ev, dtype=float).reshape(-1, 6)
+        ev[:, 0] += self.k * self.dt
+        self._events.append(ev)
+        self._X.append(X[1:])
+        self._S.append(S[1:])
+        self.x, self.s = X[-1].copy(), S[-1].copy()
+        if not self.segments or self.segments[-1][2] is not system:
+            self.segments.append([self.k, self.k, system])
+            system.azimuth0 = azimuth0  # the stretch's start (its tables' azimuths)
+        self.k += n_steps
+        self.segments[-1][1] = self.k
+        for key, val in st.items():
+            if isinstance(val, (int, float)):
+                self.stats[key] = self.stats.get(key, 0) + val
+        self.cpu += time.process_time() - t0
+
+    def rebase(self, system: PiecewiseLinearSystem, x: np.ndarray, azimuth: float) -> None:
+        """Continue from state ``x`` (the reference rotation re-based: :func:`reconcile`) with
+        ``system``; contacts whose state no longer matches their gap switch now, logged."""
+        from . import reconcile
+
+        events: list = []
+        self.x = np.array(x, dtype=float)
+        self.s = reconcile(system, self.x, self.s, self.k * self.dt, events, azimuth)
+        if events:
+            self._events.append(np.array(events, dtype=float).reshape(-1, 6))
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(X, S, events)`` of the run so far."""
+        X, S = np.concatenate(self._X), np.concatenate(self._S)
+        ev = np.concatenate(self._events) if self._events else np.empty((0, 6))
+        return X, S, ev
