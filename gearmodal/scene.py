@@ -62,7 +62,8 @@ from .model.model import Model
 _SCENE_KEYS = {"model", "t_end", "dt", "method", "speed_rpm", "tolerance"}
 _TOP = {"scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind"}
 _TURBINE_KEYS = {"file", "rotor_speed0_rpm", "azimuth0_deg", "connected",
-                 "mounting_azimuth_deg", "aero_dt", "aero_hold", "rebase_speed"}
+                 "mounting_azimuth_deg", "aero_dt", "aero_hold", "rebase_speed",
+                 "rebase_angle"}
 _LOAD_FILE_KEYS = {"path", "format", "t_start", "mapping"}
 _WAVE = {"mean", "amplitude", "frequency_hz", "phase_deg"}
 
@@ -282,7 +283,7 @@ def _turbine(spec: dict, wspec: dict, p: Path, t_end: float):
         turbine.mounting_azimuth_deg = v.number("turbine.mounting_azimuth_deg",
                                                 spec["mounting_azimuth_deg"], "deg")
     opts = {}
-    for key in ("rotor_speed0_rpm", "azimuth0_deg", "aero_dt", "rebase_speed"):
+    for key in ("rotor_speed0_rpm", "azimuth0_deg", "aero_dt", "rebase_speed", "rebase_angle"):
         if key in spec:
             opts[key] = v.number(f"turbine.{key}", spec[key], "")
     if "connected" in spec:

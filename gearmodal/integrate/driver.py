@@ -139,6 +139,7 @@ class Driver:
         self.s = reconcile(system, self.x, self.s, self.k * self.dt, events, azimuth)
         if events:
             self._events.append(np.array(events, dtype=float).reshape(-1, 6))
+        self.stats["rebase_switches"] = self.stats.get("rebase_switches", 0) + len(events)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(X, S, events)`` of the run so far."""

@@ -25,12 +25,13 @@ speed: torque ``T(w_f) + (dT/dw) (w - w_f)``, i.e. a constant load plus a viscou
 limit). The gearbox geometry turns with the reference azimuth and is integrated exactly as the
 time-periodic system it is (:mod:`gearmodal.integrate.periodic`): there is no refreeze. The
 reference is **re-based** only where the speed drifts (by ``rebase_speed`` of the reference
-speed) or the generator cuts in: the drivetrain's rigid rotation is moved out of ``q`` into
-the reference (``phi = r^T M q / r^T M r`` with ``r`` the free rotation mode; likewise the
-speed), and the speed terms and generator tangent are taken at the new speed. Moving ``phi``
-into the azimuth moves the turning gaps by second-order terms (``phi`` times a deflection);
-a contact whose state no longer matches is switched there and logged
-(:func:`gearmodal.integrate.reconcile`).
+speed), the drivetrain's rigid rotation ``phi = r^T M q / r^T M r`` (``r`` the free rotation
+mode) leaves it by ``rebase_angle``, or the generator cuts in. The reference azimuth stays
+continuous: the turning geometry never jumps (moving ``phi`` into the azimuth at once would
+move every turning gap by ``phi`` times a deflection: a kick to the carrier floating in its
+clearance). The new reference speed is the drivetrain's plus ``phi / REBASE_TAU``, so the
+rigid rotation left in ``q`` is taken up smoothly; the speed terms and the generator tangent
+are taken at the new speed, and the velocities re-expressed against it exactly.
 
 Loads on the gearbox: the rotor's aerodynamic torque on ``rotor.torque``, the generator torque
 on ``generator.torque`` and the shaft-end force on the first planetary carrier
@@ -66,6 +67,8 @@ from .turbine import RPM, TURBINE_COLUMNS, Turbine, TurbineResult, mark_cut_in
 from .wind import Wind
 
 HOLDS = ("interpolate", "hold", "linear")
+#: time (s) over which a re-based reference speed takes up the drivetrain's rigid rotation
+REBASE_TAU = 0.1
 
 
 @dataclass
@@ -190,6 +193,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                         dt: float = 2e-3, aero_dt: float = 0.02, aero_hold: str = "interpolate",
                         rotor_speed0_rpm: float = 6.0, azimuth0_deg: float = 0.0,
                         connected: bool = False, rebase_speed: float = 0.01,
+                        rebase_angle: float = 5e-4,
                         method: str = "exact", progress=None,
                         **options) -> DrivetrainResult:
     """Run turbine and gearbox together from ``rotor_speed0_rpm`` for ``t_end`` s.
@@ -206,13 +210,15 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     rotor_speed0_rpm, azimuth0_deg : initial rotor speed and blade-1 azimuth.
     connected : start with the generator on the grid (else it cuts in at synchronous speed).
     rebase_speed : relative drift of the rotor speed from the reference that re-bases the
-        reference rotation (module docstring).
+        reference rotation (module docstring). rebase_angle : rigid rotation (rad) of the
+        drivetrain against the reference that re-bases it: the turning geometry is taken at
+        the reference azimuth, so this bounds how far it lags the true carrier angle.
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``; ``options`` go to it (refused if it
         does not take them).
     progress : ``progress(i, n)`` per aerodynamic step (the solver never prints).
     """
     for label, val in (("t_end", t_end), ("dt", dt), ("aero_dt", aero_dt),
-                       ("rebase_speed", rebase_speed)):
+                       ("rebase_speed", rebase_speed), ("rebase_angle", rebase_angle)):
         if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
             raise ModelError(label, f"= {val!r}: must be a finite number > 0")
     m_sub = round(aero_dt / dt)
@@ -338,11 +344,16 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         prev = u_now
         kk = k * m_sub  # gearbox step index
         # -- re-basing: rigid rotation into the reference; speed terms, generator tangent
-        if system is None or switched or abs(om - om_f) > rebase_speed * max(abs(om_f), 1e-3):
-            phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
-            psi_f, om_f, t_f = psi_f + om_f * (t - t_f) + phi, om_f + dom, t
-            x[:n] -= r * phi
-            x[n:] -= r * dom
+        phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
+        if (system is None or switched or abs(dom) > rebase_speed * max(abs(om_f), 1e-3)
+                or abs(phi) > rebase_angle):
+            # the reference azimuth stays continuous (no jump of the turning geometry); its
+            # new speed is the drivetrain's plus phi / REBASE_TAU, which steers the rigid
+            # rotation left in q back towards zero
+            om_new = om_f + dom + phi / REBASE_TAU if system is not None else om_f
+            psi_f, t_f = psi_f + om_f * (t - t_f), t
+            x[n:] -= r * (om_new - om_f)
+            om_f = om_new
             rho = None if system is None or switched else system.rho_bound
             system, T0 = reference(om_f, on, rho)
             if s is None:
@@ -386,7 +397,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 "t_end": t_end, "dt": dt, "aero_dt": aero_dt, "aero_hold": aero_hold,
                 "rotor_speed0_rpm": rotor_speed0_rpm, "azimuth0_deg": azimuth0_deg,
                 "mounting_azimuth_deg": turbine.mounting_azimuth_deg,
-                "rebase_speed": rebase_speed, "method": method, "options": options,
+                "rebase_speed": rebase_speed, "rebase_angle": rebase_angle,
+                "method": method, "options": options,
                 "shaft_end_force": "on the carrier" if bending else "not modelled (the first "
                 "stage's carrier has no translation)",
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
