@@ -77,10 +77,11 @@ def run_newmark(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: 
         changed = np.flatnonzero(new != s)
         if len(changed):
             r = system.rate(x, azimuth(k + 1))
+            wv = system.velocity_term(x, azimuth(k + 1))
             for e in changed:
                 frac = p_prev[e] / (p_prev[e] - p[e]) if p_prev[e] != p[e] else 1.0
                 te = (k + min(max(frac, 0.0), 1.0)) * dt
-                force = system.k[e] * max(p[e], 0.0) + system.c[e] * r[e] if new[e] else 0.0
+                force = system.k[e] * max(p[e], 0.0) + system.c[e] * wv[e] if new[e] else 0.0
                 events.append((te, int(e), bool(s[e]), bool(new[e]), float(r[e]), float(force)))
             s = new
             # the acceleration consistent with the new state starts the next step

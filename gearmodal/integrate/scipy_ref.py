@@ -144,6 +144,7 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
                 x, t = np.asarray(sol.y)[:, -1].copy(), t_stop
                 # a muted contact whose state no longer matches its gap switches now
                 p, r = system.penetration(x, azimuth(t)), system.rate(x, azimuth(t))
+                wv = system.velocity_term(x, azimuth(t))
                 for e in sorted(muted):
                     if e >= nc:
                         sr = rd.switch(x, sr, e - nc, float(t), nc, events, check=True)
@@ -151,7 +152,7 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
                     if (p[e] > 0) != s[e]:
                         s = s.copy()
                         s[e] = not s[e]
-                        force = ks[e] * max(p[e], 0.0) + system.c[e] * r[e] if s[e] \
+                        force = ks[e] * max(p[e], 0.0) + system.c[e] * wv[e] if s[e] \
                             else 0.0
                         events.append((float(t), int(e), not s[e], bool(s[e]), float(r[e]),
                                        float(force)))
@@ -171,6 +172,7 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         else:
             muted = set()
         r = system.rate(x, azimuth(te))
+        wv = system.velocity_term(x, azimuth(te))
         for e in fired:
             if e >= nc:
                 sr = rd.switch(x, sr, e - nc, float(te), nc, events)
@@ -178,7 +180,7 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             before = bool(s[e])
             s = s.copy()
             s[e] = not before
-            force = system.c[e] * r[e] if s[e] else 0.0
+            force = system.c[e] * wv[e] if s[e] else 0.0
             events.append((float(te), int(e), before, bool(s[e]), float(r[e]), float(force)))
         if len(events) > max_events:
             raise ModelError("simulate", f"scipy: more than {max_events} events")

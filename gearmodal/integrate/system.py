@@ -174,6 +174,9 @@ class PiecewiseLinearSystem:
         forces); call before the first propagation of this system."""
         if "_exact_integrators" in self.__dict__:
             raise ModelError("inputs", "set the input basis before the first propagation")
+        if self.turning:
+            raise ModelError("inputs", "a turning system takes its forces as load values "
+                             "(use_loads), not in an input basis")
         n = self.n
         cols = [np.asarray(inputs, dtype=float).reshape(n, -1)]
         hit = self.offset != 0.0
@@ -278,10 +281,35 @@ class PiecewiseLinearSystem:
         return self.W @ x[: self.n] - self.offset
 
     def rate(self, x: np.ndarray, azimuth: float | None = None) -> np.ndarray:
-        """Penetration rate ``W v`` (the velocity term of the gap's rate)."""
-        if self.geometry is not None:
-            return self.at(self.azimuth0 if azimuth is None else azimuth)["W"] @ x[self.n:]
-        return self.W @ x[self.n:]
+        """Penetration rate, the time derivative of the gap: ``W v``, plus for a turning row
+        ``Omega (W'(psi) q - offset'(psi))`` at input ``azimuth`` (rad; default the run's
+        start). (The contact's damping force acts on ``W v`` only: :meth:`velocity_term`.)"""
+        if self.geometry is None:
+            return self.W @ x[self.n:]
+        psi = self.azimuth0 if azimuth is None else azimuth
+        Wd, od = self._row_derivatives(psi)
+        return self.velocity_term(x, psi) + self.omega * (Wd @ x[: self.n] - od)
+
+    def velocity_term(self, x: np.ndarray, azimuth: float | None = None) -> np.ndarray:
+        """``W(psi) v``: the velocity on which a contact's damping acts (the assembled
+        equations' ``C = sum c w w^T``)."""
+        if self.geometry is None:
+            return self.W @ x[self.n:]
+        return self.at(self.azimuth0 if azimuth is None else azimuth)["W"] @ x[self.n:]
+
+    def _row_derivatives(self, azimuth: float) -> tuple[np.ndarray, np.ndarray]:
+        """``dW/dpsi`` and ``d offset/dpsi`` of the contact rows at ``azimuth``."""
+        g = self.geometry
+        hs = g.harmonics
+        c, s = np.cos(hs * azimuth), np.sin(hs * azimuth)
+        out = []
+        for key in ("contacts.W", "contacts.offset"):
+            if key in g.constant:
+                out.append(np.zeros_like(g.constant[key]))
+            else:
+                a, b = g.coef[key]
+                out.append(np.tensordot(-hs * s, a, axes=1) + np.tensordot(hs * c, b, axes=1))
+        return out[0], out[1]
 
     def gaps(self, X: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Penetrations ``W q - offset`` and their velocity terms ``W v`` of every contact for
@@ -322,7 +350,11 @@ class PiecewiseLinearSystem:
     def energy(self, x: np.ndarray, s: np.ndarray | None = None) -> float:
         """Mechanical energy: kinetic + always-active springs + compressed contacts, J.
 
-        Conserved by the undamped, unloaded system (centripetal terms act as springs)."""
+        Conserved by the undamped, unloaded system (centripetal terms act as springs); a
+        turning system (time-periodic) has no such invariant and is refused."""
+        if self.turning:
+            raise ModelError("energy", "a turning (time-periodic) system conserves no "
+                             "mechanical energy of its frozen matrices")
         n = self.n
         q, v = x[:n], x[n:]
         p = np.maximum(self.penetration(x), 0.0)

@@ -304,6 +304,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     on = bool(connected)
     cut_in = 0.0 if on else None
     system, T0 = None, 0.0
+    om_rho = om_f  # the speed of the last full spectral bound
     rows = []
     run = None  # the integration Driver, from the start state on
     stats: dict = {"n_rebases": 0}
@@ -354,8 +355,13 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             psi_f, t_f = psi_f + om_f * (t - t_f), t
             x[n:] -= r * (om_new - om_f)
             om_f = om_new
-            rho = None if system is None or switched else system.rho_bound
-            system, T0 = reference(om_f, on, rho)
+            # the spectral bound is computed anew at the start, at cut-in and once the speed
+            # has moved by a tenth since it last was; in between the last one serves
+            fresh = (system is None or switched
+                     or abs(om_f - om_rho) > 0.1 * max(abs(om_rho), 1e-3))
+            system, T0 = reference(om_f, on, None if fresh else system.rho_bound)
+            if fresh:
+                om_rho = om_f
             if s is None:
                 # the drivetrain accelerating rigidly under the first loads, at the initial
                 # azimuth's geometry
