@@ -359,7 +359,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             # has moved by a tenth since it last was; in between the last one serves
             fresh = (system is None or switched
                      or abs(om_f - om_rho) > 0.1 * max(abs(om_rho), 1e-3))
-            system, T0 = reference(om_f, on, None if fresh else system.rho_bound)
+            system, T0 = reference(om_f, on,
+                                   None if fresh else getattr(system, "rho_bound", None))
             if fresh:
                 om_rho = om_f
             if s is None:
