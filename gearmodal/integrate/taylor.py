@@ -144,25 +144,33 @@ def _term(MKC, B, y, k, c2, c1):
         B[k + 2, i] = a
 
 
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _frozen_term(MKC, B, y, k, h, den, g0, g1):
+    """Row ``k + 2`` of (T1): the frozen product and the forcing terms ``g0``, ``g1`` (the
+    force at the piece's start and its rate enter rows 2 and 3 only)."""
+    n = B.shape[1]
+    h2 = h * h
+    _term(MKC, B, y, k, -h2 * den, -(k + 1.0) * h * den)
+    if k == 0:
+        for i in range(n):
+            B[2, i] += g0[i] * h2 * den
+    elif k == 1:
+        for i in range(n):
+            B[3, i] += g1[i] * h2 * h * den
+
+
 @numba.njit(cache=True, fastmath=True)
 def _coefficients(MKC, g0, g1, q, v, h, B, y):
     """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions by (T1) with the forcing terms
     ``g0``, ``g1``; ``MKC`` is ``[M^-1 K_s, M^-1 C_s]`` side by side (one contiguous product
     per term); ``y`` is scratch of length 2 n (no allocation in the hot loop)."""
     n_terms, n = B.shape
-    h2 = h * h
     for i in range(n):
         B[0, i] = q[i]
         B[1, i] = v[i] * h
     for k in range(n_terms - 2):
         den = 1.0 / ((k + 1.0) * (k + 2.0))
-        _term(MKC, B, y, k, -h2 * den, -(k + 1.0) * h * den)
-        if k == 0:
-            for i in range(n):
-                B[2, i] += g0[i] * h2 * den
-        elif k == 1:
-            for i in range(n):
-                B[3, i] += g1[i] * h2 * h * den
+        _frozen_term(MKC, B, y, k, h, den, g0, g1)
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -252,13 +260,7 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, ZK, ZC, Y
         if k + 2 >= n_terms:
             continue
         den = 1.0 / ((k + 1.0) * (k + 2.0))
-        _term(MKC, B, y, k, -h2 * den, -(k + 1.0) * h * den)
-        if k == 0:
-            for i in range(n):
-                B[2, i] += g0[i] * h2 * den
-        elif k == 1:
-            for i in range(n):
-                B[3, i] += g1[i] * h2 * h * den
+        _frozen_term(MKC, B, y, k, h, den, g0, g1)
         for hh in range(1, H1):
             ek = E[hh, k] * h2 * den
             ek1 = E[hh, k - 1] * (h2 * h * den) if k > 0 else 0j
