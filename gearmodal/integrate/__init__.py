@@ -1,8 +1,10 @@
 """Time integration of the piecewise-linear contact model: ``gm.simulate`` (DESIGN 3.2).
 
-One function in front, interchangeable methods behind it:
+One function in front, one driver (:class:`~.driver.Driver`) and interchangeable methods
+behind it (:mod:`.driver`):
 
-- ``method="exact"``: event-driven exact propagation (:mod:`.exact`);
+- ``method="exact"``: event-driven exact propagation (:mod:`.exact`, :mod:`.taylor`), turning
+  geometry included (:mod:`.periodic`);
 - ``method="newmark"``: Newmark average acceleration, fixed step, events by interpolation
   (:mod:`.newmark`);
 - ``method="scipy"``: ``scipy.integrate.solve_ivp`` with event functions (:mod:`.scipy_ref`;
@@ -193,14 +195,6 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     if casm is not None:
         _expand_coupled(result, model, casm, [(0, n_steps, system, casm, U)], X, S, speed_rpm)
     return result
-
-
-def _shift(ev, offset: float) -> np.ndarray:
-    """A runner's events (tuples or an (n, 6) array: time, contact, before, after, rate,
-    force) as a new (n, 6) float array with the times shifted by ``offset`` (s)."""
-    a = np.array(ev, dtype=float).reshape(-1, 6)
-    a[:, 0] += offset
-    return a
 
 
 def event_array(chunks) -> np.ndarray:

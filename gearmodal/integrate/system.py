@@ -49,11 +49,17 @@ class PiecewiseLinearSystem:
         its turning harmonics in ``periodic`` (:mod:`gearmodal.integrate.periodic`), integrated
         exactly by the Taylor propagator; :meth:`at` gives the frozen matrices at any azimuth
         (the reference methods).
+    spectral_bound : the ``rho_bound`` of a system that differs from this one only in its speed
+        terms (1/s), reused with a small margin instead of computing a new bound.
     """
 
     def __init__(self, asm: Assembly, speed_rpm: float = 0.0, inputs: np.ndarray | None = None,
-                 geometry=None):
+                 geometry=None, spectral_bound: float | None = None):
         self.asm = asm
+        # a bound of the spectral radius known from a system that differs from this one only
+        # in its speed terms (the turbine's re-basing): the Taylor integrator takes it with a
+        # margin instead of computing one (taylor.RHO_SPEED)
+        self.rho_base = spectral_bound
         n = asm.n
         self.n = n
         om = float(speed_rpm) * RPM

@@ -286,9 +286,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         (by ``rebase_speed``: the speed terms are soft against the meshes; the integrator adds
         a margin, and the series' tail check halves any piece it makes too long)."""
         T0_, c_gen = gen.tangent(sg * g_ratio * om_ref) if on_grid else (0.0, 0.0)
-        sy = PiecewiseLinearSystem(asm0, om_ref / RPM, geometry=geo)
-        if rho is not None:
-            sy.rho_base = rho
+        sy = PiecewiseLinearSystem(asm0, om_ref / RPM, geometry=geo, spectral_bound=rho)
         if c_gen:
             sy.add_damping(i_gen, c_gen)  # the generator's tangent slip damping
         sy.use_loads(cols)  # load values in, the turning load map followed exactly
