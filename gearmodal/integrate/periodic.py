@@ -105,8 +105,9 @@ def periodic_data(geo, Minv: np.ndarray, speed: float) -> tuple[dict, Periodic |
         if key not in geo.constant and np.any(_live(_complex(coef, key))):
             raise ModelError("model", f"its {key} depends on the input azimuth: not modelled "
                              "by the exact method")
-    ZKf = _complex(coef, "K") if "K" not in geo.constant else np.zeros((H1, n, n))
-    ZCf = _complex(coef, "C") if "C" not in geo.constant else np.zeros((H1, n, n))
+    # (complex always: one compiled kernel for every model)
+    ZKf = _complex(coef, "K") if "K" not in geo.constant else np.zeros((H1, n, n), complex)
+    ZCf = _complex(coef, "C") if "C" not in geo.constant else np.zeros((H1, n, n), complex)
     Wz, Oz = (_complex(coef, key) if key not in geo.constant
               else np.concatenate([geo.constant[key][None].astype(complex),
                                    np.zeros((H1 - 1,) + geo.constant[key].shape)])
