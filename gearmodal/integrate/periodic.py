@@ -49,6 +49,7 @@ class Periodic:
     TOFF : (H1, nTC) their offsets' harmonics.
     TU : (H1, nTC, n) ``M^-1`` times their rows' harmonics.
     krows : the rows where ``ZK`` or ``ZC`` is nonzero (the kernel's products skip the rest).
+    urows : the rows where ``TU`` is nonzero.
     """
 
     harm: np.ndarray
@@ -60,6 +61,7 @@ class Periodic:
     TOFF: np.ndarray
     TU: np.ndarray
     krows: np.ndarray
+    urows: np.ndarray
 
     @property
     def turns(self) -> bool:
@@ -127,11 +129,12 @@ def periodic_data(geo, Minv: np.ndarray, speed: float) -> tuple[dict, Periodic |
     krows = np.flatnonzero((np.abs(ZK) + np.abs(ZC)).max(axis=(0, 2)) > 0)
     TW = np.ascontiguousarray(Wz[:, tc_idx][:, :, tcols])
     TU = np.ascontiguousarray(np.einsum("ij,hej->hei", Minv, Wz[:, tc_idx]))
+    urows = np.flatnonzero(np.abs(TU).max(axis=(0, 1)) > 0) if len(tc_idx) else np.zeros(0, int)
     per = Periodic(harm=np.asarray(geo.harmonics, dtype=np.int64), tcols=tcols.astype(np.int64),
                    ZK=np.ascontiguousarray(ZK), ZC=np.ascontiguousarray(ZC),
                    tc_idx=tc_idx.astype(np.int64), TW=TW,
                    TOFF=np.ascontiguousarray(Oz[:, tc_idx]), TU=TU,
-                   krows=krows.astype(np.int64))
+                   krows=krows.astype(np.int64), urows=urows.astype(np.int64))
     # the frozen system's constant rows: a turning contact's row lives in Periodic only
     constant["contacts.W"] = constant["contacts.W"].copy()
     constant["contacts.W"][tc_idx] = 0.0
@@ -161,5 +164,5 @@ def frozen() -> tuple[Periodic, np.ndarray]:
     per = Periodic(harm=np.zeros(1, dtype=np.int64), tcols=np.zeros(0, dtype=np.int64),
                    ZK=z, ZC=z, tc_idx=np.zeros(0, dtype=np.int64),
                    TW=z, TOFF=np.zeros((1, 0), dtype=complex), TU=z,
-                   krows=np.zeros(0, dtype=np.int64))
+                   krows=np.zeros(0, dtype=np.int64), urows=np.zeros(0, dtype=np.int64))
     return per, np.zeros((1, 0, 0), dtype=complex)

@@ -174,8 +174,8 @@ def _coefficients(MKC, g0, g1, q, v, h, B, y):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, ZK, ZC, Y, Yd, Bt, TW,
-                          OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS):
+def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, urows, ZK, ZC, Y, Yd,
+                          Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS):
     """:func:`_coefficients` of the time-varying system (T2): the frozen part as (T1), plus
     the turning harmonics of :mod:`gearmodal.integrate.periodic` by Cauchy products with the
     piece's exponential series ``E`` (H1, n_terms) ((P2), ``E[0]`` the constant 1):
@@ -205,7 +205,11 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, ZK, ZC, Y
             for c in range(nT):
                 if ZC[hh, i, c] != 0.0:
                     cturn = True
-    rates = cturn or nTC > 0
+    # the rate products: a turning damping, or a turning contact with damping
+    rates = cturn
+    for e in range(nTC):
+        if ct[e] != 0.0:
+            rates = True
     loads = False  # turning loads
     for hh in range(1, H1):
         for i in range(n):
@@ -252,7 +256,7 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, ZK, ZC, Y
                 for c in range(nT):
                     w = TW[hh, e, c]
                     pr += w.real * Y[0, hh, k, c] - w.imag * Y[1, hh, k, c]
-                    if k + 1 < n_terms:
+                    if rates and k + 1 < n_terms:
                         pd += w.real * Yd[0, hh, k, c] - w.imag * Yd[1, hh, k, c]
             P[e, k] = pr
             PD[e, k] = pd
@@ -286,7 +290,7 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, ZK, ZC, Y
                 for j in range(k + 1):
                     fe += E[hh, j] * FT[e, k - j]
                 fe *= h2 * den
-                for i in range(n):
+                for i in urows:
                     B[k + 2, i] -= (TU[hh, e, i] * fe).real
 
 
@@ -551,7 +555,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                dt, h_max,
                terms, tscale, margin, simultaneous, max_events, X, S, EV, n_ev,
                counts, sched_t, sched_e, sched_k, sched_pos,
-               om, psi0, harm, tcols, krows, ZK, ZC, tc_idx, TW, TOFF, TU, GT):
+               om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -716,9 +720,9 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                                 a += (TOFF[hh, e] * E[hh, kk]).real
                             OFS[e, kk] = a
                     # (whole arrays, the first nt terms used: contiguous, no strided views)
-                    _coefficients_turning(MKC, g0, gS, q, v, h, Bv, ysc, E, tcols, krows, ZK, ZC,
-                                          Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV,
-                                          VS)
+                    _coefficients_turning(MKC, g0, gS, q, v, h, Bv, ysc, E, tcols, krows, urows,
+                                          ZK, ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD,
+                                          FT, GV, VS)
                 else:
                     _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
                 if _converged(Bv, TAIL):
@@ -973,13 +977,13 @@ class TaylorIntegrator:
             GT = system.GT
             if GT.shape != (len(pr.harm),) + self.MinvU.shape:  # forces given as such
                 GT = np.zeros((len(pr.harm),) + self.MinvU.shape, dtype=complex)
-            self.turning = (pr.harm, pr.tcols, pr.krows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
+            self.turning = (pr.harm, pr.tcols, pr.krows, pr.urows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
                             pr.TOFF, pr.TU, np.ascontiguousarray(GT))
         else:
             from .periodic import frozen
 
             pr, GT = frozen()
-            self.turning = (pr.harm, pr.tcols, pr.krows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
+            self.turning = (pr.harm, pr.tcols, pr.krows, pr.urows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
                             pr.TOFF, pr.TU, GT)
 
     def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray,
