@@ -49,9 +49,7 @@ N_TERMS = 24
 #: below the resolution of a double in [0, 1])
 DEPTH = 60
 MIN_WIDTH = 2.0**-DEPTH
-#: a refrozen segment (same system, turned geometry) reuses the previous bound times this
-RHO_MARGIN = 1.25
-#: a turning system at a re-based speed reuses the previous bound times this
+#: a system re-based to a slightly different speed reuses the previous bound times this
 RHO_SPEED = 1.01
 #: contact switches applied as rank-one updates before the state's matrices are rebuilt
 REFRESH = 64
@@ -906,7 +904,7 @@ def spectral_bound_all(system) -> float:
     return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
 
 
-#: azimuths at which a turning system's spectral bound is taken (the largest, with RHO_MARGIN)
+#: azimuths at which a turning system's spectral bound is taken (the largest, with a margin)
 BOUND_AZIMUTHS = 8
 
 
@@ -950,22 +948,15 @@ class TaylorIntegrator:
         self.widx = cols.astype(np.int64)
         self.wval = np.ascontiguousarray(system.W[rows, cols])
         base = getattr(system, "rho_base", None)
-        if system.turning:
-            if base:
-                # the same geometry at a slightly different speed (the turbine's re-basing)
-                self.rho = RHO_SPEED * float(base)
-                system.rho_bound = float(base)  # passed on as is: margins do not compound
-            else:
-                self.rho = max(spectral_bound_turning(system), 1e-300)
-                system.rho_bound = self.rho
-        elif base:
-            # a refrozen segment of the same system (the geometry turned) passes its
-            # predecessor's bound instead of paying ~1 ms of eigenvalues per segment: used with
-            # RHO_MARGIN, and the series' tail check still halves any piece it makes too long
-            self.rho = RHO_MARGIN * float(base)
+        if base:
+            # a system that differs from the one that computed ``base`` only in its speed
+            # terms (the turbine's re-basing): its bound with a margin, instead of ~1-3 ms of
+            # eigenvalues; the series' tail check still halves any piece it makes too long
+            self.rho = RHO_SPEED * float(base)
             system.rho_bound = float(base)  # passed on as is: margins do not compound
         else:
-            self.rho = max(spectral_bound_all(system), 1e-300)
+            bound = spectral_bound_turning if system.turning else spectral_bound_all
+            self.rho = max(bound(system), 1e-300)
             system.rho_bound = self.rho
         self.terms = np.array(_term_table(float(reach), int(n_terms or 0)), dtype=np.int64)
         self.n_terms = int(self.terms[-1])  # the full count, last in the table
@@ -973,18 +964,15 @@ class TaylorIntegrator:
         self.h_max = min(reach / self.rho, self.dt)
         self.MinvU = np.ascontiguousarray(system.MinvU)
         if system.turning:
-            pr = system.periodic
-            GT = system.GT
+            pr, GT = system.periodic, system.GT
             if GT.shape != (len(pr.harm),) + self.MinvU.shape:  # forces given as such
                 GT = np.zeros((len(pr.harm),) + self.MinvU.shape, dtype=complex)
-            self.turning = (pr.harm, pr.tcols, pr.krows, pr.urows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
-                            pr.TOFF, pr.TU, np.ascontiguousarray(GT))
         else:
             from .periodic import frozen
 
             pr, GT = frozen()
-            self.turning = (pr.harm, pr.tcols, pr.krows, pr.urows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
-                            pr.TOFF, pr.TU, GT)
+        self.turning = (pr.harm, pr.tcols, pr.krows, pr.urows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
+                        pr.TOFF, pr.TU, np.ascontiguousarray(GT))
 
     def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray,
             azimuth0: float = 0.0):
