@@ -17,6 +17,11 @@ import numpy as np
 
 from .errors import ModelError
 
+#: the largest input speed (rpm) and number of speeds a Campbell sweep takes from the command
+#: line (DESIGN 3.3 names 0-3000 rpm; a million speeds would run for days)
+MAX_SPEED_RPM = 1e5
+MAX_SPEEDS = 10_000
+
 
 def _speeds(text: str) -> np.ndarray:
     try:
@@ -24,8 +29,9 @@ def _speeds(text: str) -> np.ndarray:
         a, b, n = float(a), float(b), int(n)
     except ValueError:
         raise ModelError("--speeds", f"= {text!r}: expected A:B:N, e.g. 0:30:61") from None
-    if not (0 <= a < b) or n < 2:
-        raise ModelError("--speeds", f"= {text!r}: need 0 <= A < B and N >= 2")
+    if not (0 <= a < b <= MAX_SPEED_RPM) or not 2 <= n <= MAX_SPEEDS:
+        raise ModelError("--speeds", f"= {text!r}: need 0 <= A < B <= {MAX_SPEED_RPM:g} rpm "
+                         f"and 2 <= N <= {MAX_SPEEDS}")
     return np.linspace(a, b, n)
 
 
@@ -50,6 +56,9 @@ def _loads(args, model) -> dict | None:
                              "rotor.torque=2.6e5") from None
         if not sep:
             raise ModelError("--load", f"= {item!r}: expected NAME=VALUE")
+        if not np.isfinite(loads[name.strip()]):
+            raise ModelError("--load", f"= {item!r}: the value must be a finite number "
+                             "(N or N m)")
     if args.balance:
         from .static import balance
 
@@ -71,7 +80,7 @@ def cmd_campbell(args) -> int:
     from .report import write_campbell_report
 
     model = _load(args.model)
-    speeds = _speeds(args.speeds) if args.speeds else _default_speeds(model)
+    speeds = _speeds(args.speeds) if args.speeds is not None else _default_speeds(model)
     loads = _loads(args, model)
     with tqdm(total=len(speeds), desc="Campbell sweep", unit="speed",
               disable=args.quiet) as bar:

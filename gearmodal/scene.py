@@ -197,6 +197,8 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
         raise
     t_end = v.positive("scene.t_end", sc["t_end"], "s")
     dt = v.positive("scene.dt", sc["dt"], "s")
+    if dt > t_end:
+        raise ModelError("scene.dt", f"= {dt!r}: must be at most scene.t_end = {t_end!r} s")
     method = v.choice("scene.method", sc.get("method", "exact"),
                       ("exact", "newmark", "scipy", "auto"))
     tolerance = 0.05
@@ -287,7 +289,10 @@ def _turbine(spec: dict, wspec: dict, p: Path, t_end: float):
         if key in spec:
             opts[key] = v.number(f"turbine.{key}", spec[key], "")
     if "connected" in spec:
-        opts["connected"] = bool(spec["connected"])
+        if not isinstance(spec["connected"], bool):  # "false" would read as true
+            raise ModelError("turbine.connected", f"expected true or false, got "
+                             f"{type(spec['connected']).__name__} {spec['connected']!r}")
+        opts["connected"] = spec["connected"]
     if "aero_hold" in spec:
         opts["aero_hold"] = v.choice("turbine.aero_hold", spec["aero_hold"],
                                      ("interpolate", "hold", "linear"))

@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pandas as pd
 
@@ -61,3 +62,29 @@ def test_bad_scene_is_one_line_error(tmp_path):
     r = subprocess.run([sys.executable, "-m", "gearmodal.cli", "simulate", str(bad), "--out",
                         str(tmp_path / "o")], capture_output=True, text=True)
     assert r.returncode == 2 and "Traceback" not in r.stderr and "x.toml" in r.stderr
+
+
+def test_bad_flags_and_scene_values_are_refused_by_name(tmp_path, capsys):
+    """Flags and scene values that used to crash, hang or be misread (issue "Unbreakable
+    inputs"): a non-finite load, a sweep of 1e8 speeds or to 1e300 rpm, an empty --speeds,
+    a step longer than the run, 'connected = "false"' (a string that read as true)."""
+    out = str(tmp_path / "o")
+    for flags, field in ((["--load", "pinion.torque=nan"], "--load"),
+                         (["--load", "pinion.torque=inf"], "--load"),
+                         (["--speeds", "0:10:100000000"], "--speeds"),
+                         (["--speeds", "0:1e300:3"], "--speeds"),
+                         (["--speeds", ""], "--speeds")):
+        assert main(["campbell", "studies/models/gear_pair.toml", "--out", out, *flags]) == 2
+        assert field in capsys.readouterr().err
+    scene = tmp_path / "s.toml"
+    model = str(Path(MODEL).resolve().parent / "gear_pair.toml")
+    scene.write_text(f'[scene]\nmodel = "{model}"\nt_end = 0.01\ndt = 1.0\n')
+    assert main(["simulate", str(scene), "--out", out]) == 2
+    assert "scene.dt" in capsys.readouterr().err
+    turb = tmp_path / "t.toml"
+    text = open("studies/scenes/600kw_turbine_10ms.toml").read()
+    text = text.replace('"../models/', '"' + str(Path("studies/models").resolve()) + "/")
+    text = text.replace("connected = false", 'connected = "false"')
+    turb.write_text(text)
+    assert main(["simulate", str(turb), "--out", out]) == 2
+    assert "turbine.connected" in capsys.readouterr().err

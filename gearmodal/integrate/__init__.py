@@ -137,6 +137,9 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     if not isinstance(speed_rpm, (int, float)) or isinstance(speed_rpm, bool) \
             or not math.isfinite(speed_rpm):
         raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number (rpm)")
+    if dt > t_end:
+        raise ModelError("dt", f"= {dt!r}: must be at most t_end = {t_end!r} s (the run would "
+                         f"end at {dt!r} s)")
     n_steps = int(math.ceil(t_end / dt - 1e-9))
     if n_steps > 50_000_000:
         raise ModelError("dt", f"= {dt!r}: {n_steps} steps to {t_end} s is more than 5e7")
