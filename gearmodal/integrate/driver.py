@@ -13,8 +13,6 @@ segments and loads for it, not a second loop.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from ..errors import ModelError
@@ -104,13 +102,11 @@ class Driver:
         self.segments: list[list] = []  # [k0, k1, system] with the system of each stretch
         self._X, self._S, self._events = [self.x[None]], [self.s[None]], []
         self.stats: dict = {}
-        self.cpu = 0.0
 
     def advance(self, system: PiecewiseLinearSystem, n_steps: int, F: np.ndarray,
                 azimuth0: float = 0.0) -> None:
         """Advance ``n_steps`` output steps with ``system`` and the force grid ``F``
         (``n_steps + 1`` rows), the input azimuth ``azimuth0`` (rad) at the first."""
-        t0 = time.process_time()
         X, S, ev, st = self.method.run(system, self.dt, n_steps, F, self.x, self.s,
                                        azimuth0=azimuth0, **self.options)
         ev = np.array(ev, dtype=float).reshape(-1, 6)
@@ -127,7 +123,6 @@ class Driver:
         for key, val in st.items():
             if isinstance(val, (int, float)):
                 self.stats[key] = self.stats.get(key, 0) + val
-        self.cpu += time.process_time() - t0
 
     def rebase(self, system: PiecewiseLinearSystem, x: np.ndarray, azimuth: float) -> None:
         """Continue from state ``x`` (the reference rotation re-based: :func:`reconcile`) with

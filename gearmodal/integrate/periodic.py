@@ -63,15 +63,6 @@ class Periodic:
     krows: np.ndarray
     urows: np.ndarray
 
-    @property
-    def turns(self) -> bool:
-        return len(self.harm) > 1
-
-    def rows(self, azimuth: float) -> tuple[np.ndarray, np.ndarray]:
-        """Rows ``(nTC, nT)`` on ``tcols`` and offsets of the turning contacts at ``azimuth``."""
-        e = np.exp(1j * self.harm * float(azimuth))
-        return (np.tensordot(e, self.TW, axes=1).real, (e @ self.TOFF).real)
-
 
 def _complex(coef, key):
     """``Z_h = a_h - i b_h`` of field ``key`` (P1), (H1, ...)."""
@@ -85,13 +76,12 @@ def _live(Z: np.ndarray) -> np.ndarray:
     return np.abs(Z[1:]).max(axis=0) > ZERO * scale
 
 
-def periodic_data(geo, Minv: np.ndarray, speed: float) -> tuple[dict, Periodic | None]:
+def periodic_data(geo, Minv: np.ndarray) -> tuple[dict, Periodic | None]:
     """``(constant, periodic)`` of an :class:`AzimuthAssembler` ``geo``: the constant parts
     (``a_0``) of ``K``, ``C``, the contact rows and offsets and the load map ``B`` by field
-    name, and the :class:`Periodic` data of what turns (``None`` when nothing does).
-
-    ``speed`` (rad/s) only decides whether the gyroscopic and centripetal matrices may turn:
-    they must not (a body whose inertia turns against its frame is not modelled)."""
+    name, and the :class:`Periodic` data of what turns (``None`` when nothing does). The mass,
+    gyroscopic and centripetal matrices must not turn (a body whose inertia turns against its
+    frame is not modelled)."""
     if not geo.exact:
         raise ModelError("model", "its geometry is not a trigonometric polynomial of the input "
                          "azimuth (frames turning at speed ratios other than 0 and 1 against "

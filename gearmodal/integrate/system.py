@@ -80,7 +80,7 @@ class PiecewiseLinearSystem:
         if geometry is not None:
             from .periodic import periodic_data
 
-            const, self.periodic = periodic_data(geometry, self.Minv, om)
+            const, self.periodic = periodic_data(geometry, self.Minv)
             if self.periodic is not None:
                 self.geometry = geometry
                 K, C = const["K"], const["C"]

@@ -173,7 +173,7 @@ def _coefficients(MKC, g0, g1, q, v, h, B, y):
 
 @numba.njit(cache=True, fastmath=True)
 def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, urows, ZK, ZC, Y, Yd,
-                          Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS):
+                          Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads):
     """:func:`_coefficients` of the time-varying system (T2): the frozen part as (T1), plus
     the turning harmonics of :mod:`gearmodal.integrate.periodic` by Cauchy products with the
     piece's exponential series ``E`` (H1, n_terms) ((P2), ``E[0]`` the constant 1):
@@ -195,24 +195,13 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, urows, ZK
     nT = tcols.shape[0]
     nTC = TW.shape[1]
     h2 = h * h
-    # what the turning parts need: the rate products only for a turning damping or turning
-    # contacts, the constant harmonic only for the contacts' rows
-    cturn = False
-    for hh in range(1, H1):
-        for i in krows:
-            for c in range(nT):
-                if ZC[hh, i, c] != 0.0:
-                    cturn = True
-    # the rate products: a turning damping, or a turning contact with damping
+    # what the turning parts need: the rate products for a turning damping (``cturn``) or a
+    # turning contact with damping; the constant harmonic for the contacts' rows only;
+    # ``loads``: some turning load is nonzero over this output step
     rates = cturn
     for e in range(nTC):
         if ct[e] != 0.0:
             rates = True
-    loads = False  # turning loads
-    for hh in range(1, H1):
-        for i in range(n):
-            if GV[hh, i] != 0.0 or GVS[hh, i] != 0.0:
-                loads = True
     h_lo = 0 if nTC > 0 else 1
     for i in range(n):
         B[0, i] = q[i]
@@ -620,6 +609,13 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     kt = np.empty(nTC)
     ct = np.empty(nTC)
     closed = np.empty(nTC, dtype=np.bool_)
+    cturn = False  # a turning damping (constant over the run)
+    for hh in range(1, H1):
+        for i in krows:
+            for c in range(nT):
+                if ZC[hh, i, c] != 0.0:
+                    cturn = True
+    loads = False  # a turning load over the current output step
     VA = np.zeros((H1, n), dtype=np.complex128)
     VS = np.zeros((H1, n), dtype=np.complex128)
     GV = np.zeros((H1, n), dtype=np.complex128)
@@ -648,6 +644,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             gF[i] = a0
             gS[i] = a1 / dt
         if turning:  # the turning load harmonics at the step start and their rates
+            loads = False
             for hh in range(1, H1):
                 for i in range(n):
                     z0 = 0j
@@ -657,6 +654,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                         z1 += GT[hh, i, j] * (F[k + 1, j] - F[k, j])
                     VA[hh, i] = z0
                     VS[hh, i] = z1 / dt
+                    if z0 != 0.0 or z1 != 0.0:
+                        loads = True
         t = tk
         count = 0
         fresh = False  # ga, ra hold the gaps at (t, q, v) in state s
@@ -720,7 +719,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     # (whole arrays, the first nt terms used: contiguous, no strided views)
                     _coefficients_turning(MKC, g0, gS, q, v, h, Bv, ysc, E, tcols, krows, urows,
                                           ZK, ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD,
-                                          FT, GV, VS)
+                                          FT, GV, VS, cturn, loads)
                 else:
                     _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
                 if _converged(Bv, TAIL):

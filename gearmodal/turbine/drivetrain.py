@@ -123,11 +123,6 @@ class DrivetrainResult:
         return d
 
 
-def _names(asm, ends: str) -> str | None:
-    hits = [n for n in asm.load_names if n.endswith(ends)]
-    return hits[0] if hits else None
-
-
 def _accelerating_equilibrium(asm, r: np.ndarray, speed_rpm: float, loads: dict) -> np.ndarray:
     """Deflections of the drivetrain accelerating rigidly under ``loads``: the static
     equilibrium under the loads plus the d'Alembert force ``-M r alpha`` with ``alpha = r^T F /
