@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import ModelError
+from .frames import body_selector, body_transform, centre, rz, skew
 from .kernels.joint import bearing_gap_jacobians, joint_gradients
 from .kernels.mesh import mesh_gap_jacobian
 from .kernels.wheel import (
@@ -36,9 +37,8 @@ from .kernels.wheel import (
     wheel_mass,
 )
 from .model.clearance import polygon_ramps
-from .model.components import DIRECTIONS, Gear
+from .model.components import DIRECTIONS, GROUND, Gear
 from .model.mesh_stiffness import MeshVariation, variation_of
-from .model.model import GROUND, Model
 
 
 @dataclass
@@ -195,16 +195,14 @@ class Assembly:
 
 
 def as_assembly(model) -> tuple[Assembly, str]:
-    """``(assembly, model name)`` of a :class:`Model` or a :class:`gearmodal.Coupled` system
-    (assembled at azimuth 0) or of an already assembled :class:`Assembly` (name ``""``)."""
+    """``(assembly, model name)`` of a :class:`~gearmodal.Model` or a :class:`gearmodal.Coupled`
+    system (anything with ``assemble()``, assembled at azimuth 0) or of an already assembled
+    :class:`Assembly` (name ``""``)."""
     if isinstance(model, Assembly):
         return model, ""
-    if isinstance(model, Model):
-        return model.assemble(), model.name
-    from .coupling import Coupled
-
-    if isinstance(model, Coupled):
-        return model.assemble(), model.name
+    build = getattr(model, "assemble", None)
+    if callable(build):
+        return build(), str(getattr(model, "name", ""))
     raise TypeError(f"expected a gm.Model, gm.Coupled or gm.Assembly, got "
                     f"{type(model).__name__}")
 
@@ -218,48 +216,13 @@ def reduction(asm: Assembly) -> tuple[Assembly, np.ndarray | None]:
     return asm.reduced(), N
 
 
-def _rz(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _body_transform(model: Model, body, azimuth: float) -> np.ndarray:
-    """T (6 x n_b): global (ux, uy, uz, rx, ry, rz) of the body centre from its coordinates.
-
-    The local axes are ``Rz(frame angle + orientation)``; a scaled rotation ``u = r theta``
-    contributes ``1/r`` to theta.
-    """
-    frame = model.frames[body.frame]
-    R = _rz(frame.speed_ratio * azimuth + body.orientation)
-    R6 = np.zeros((6, 6))
-    R6[:3, :3] = R
-    R6[3:, 3:] = R
-    T = R6[:, list(body.local_indices)].copy()
-    if body.rotation_scale is not None:
-        T[:, -1] /= body.rotation_scale
-    return T
-
-
-def _body_selector(body) -> np.ndarray:
-    """S (6 x n_b): local 6-vector from the body's coordinates (with the rotation scale)."""
-    S = np.eye(6)[:, list(body.local_indices)].copy()
-    if body.rotation_scale is not None:
-        S[:, -1] /= body.rotation_scale
-    return S
-
-
-def _centre(model: Model, body, azimuth: float) -> np.ndarray:
-    frame = model.frames[body.frame]
-    return _rz(frame.speed_ratio * azimuth) @ np.asarray(body.position, dtype=float)
-
-
 def _acts(w: np.ndarray) -> bool:
     """Whether a gap or joint row acts on any coordinate: entries are lever arms and direction
     cosines (m or 1), so anything below 1e-12 is the rounding of a cancelled term."""
     return bool(np.abs(w).max(initial=0.0) > 1e-12)
 
 
-def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
+def assemble(model, azimuth: float = 0.0) -> Assembly:
     """Assemble ``model`` at input azimuth ``azimuth`` (rad; geometry of frames turning against
     each other is frozen there). Returns an :class:`Assembly`.
     """
@@ -279,13 +242,13 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     G = np.zeros((n, n))
     Kc = np.zeros((n, n))
     fc = np.zeros(n)
-    T = {b.name: _body_transform(model, b, azimuth) for b in bodies}
-    centres = {b.name: _centre(model, b, azimuth) for b in bodies}
+    T = {b.name: body_transform(model, b, azimuth) for b in bodies}
+    centres = {b.name: centre(model, b, azimuth) for b in bodies}
 
     # Inertia of each wheel: the local block of the floating-frame kernels (DESIGN 2.1).
     for b in bodies:
         sl = slices[b.name]
-        S = _body_selector(b)
+        S = body_selector(b)
         args = (b.mass, b.inertia_diametral, b.inertia, *b.position, b.orientation)
         of = model.frames[b.frame].speed_ratio
         M[sl, sl] = S.T @ wheel_mass(*args)[6:, 6:] @ S
@@ -352,7 +315,7 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
         a = model.bodies[br.a]
         b = model.bodies[br.b] if br.b is not None else None
         fa = model.frames[a.frame]
-        pa = _rz(fa.speed_ratio * az) @ np.asarray(br.at, dtype=float)
+        pa = rz(fa.speed_ratio * az) @ np.asarray(br.at, dtype=float)
         cb = centres_[b.name] if b is not None else np.zeros(3)
         pb = centres_[a.name] + pa - cb
         axes_frame = br.axes_frame or (b.frame if b is not None else GROUND)
@@ -372,8 +335,8 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
     # decided at this azimuth and at a generic one, so that every azimuth of a turning frame
     # gives the same rows (a torsional carrier's pin moves along x except where sin = 0)
     probe = azimuth + 1.2345678901
-    T2 = {b.name: _body_transform(model, b, probe) for b in bodies}
-    centres2 = {b.name: _centre(model, b, probe) for b in bodies}
+    T2 = {b.name: body_transform(model, b, probe) for b in bodies}
+    centres2 = {b.name: centre(model, b, probe) for b in bodies}
     for br in model.bearings.values():
         spring_row, gap_row = bearing_jacobians(br, azimuth, T, centres)
         spring_row2, gap_row2 = bearing_jacobians(br, probe, T2, centres2)
@@ -469,12 +432,7 @@ def assemble(model: Model, azimuth: float = 0.0) -> Assembly:
                     body_slices=slices, springs=springs, round=round_)
 
 
-def _skew(a: np.ndarray) -> np.ndarray:
-    """[a]x: the matrix of ``a x (.)``."""
-    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-
-
-def _on_pins(model: Model, pinned: list[str], azimuth: float) -> Assembly:
+def _on_pins(model, pinned: list[str], azimuth: float) -> Assembly:
     """Assembly of a model whose torsional bodies ``pinned`` ride on their hosts' pins
     (``Body.pinned_to``). The model is assembled with those bodies at ``planar`` and their
     centre translations eliminated as the motion of the host's point at their centre:
@@ -505,10 +463,10 @@ def _on_pins(model: Model, pinned: list[str], azimuth: float) -> Assembly:
     N[idx, np.arange(len(idx))] = 1.0
     for name in pinned:
         b, h = model.bodies[name], model.bodies[model.bodies[name].pinned_to]
-        Th = _body_transform(model, h, azimuth)
-        arm = _centre(model, b, azimuth) - _centre(model, h, azimuth)
-        G = Th[:3] - _skew(arm) @ Th[3:]  # (P1): w x arm = -arm x w
-        R = _body_transform(mx, mx.bodies[name], azimuth)[:3, :2]
+        Th = body_transform(model, h, azimuth)
+        arm = centre(model, b, azimuth) - centre(model, h, azimuth)
+        G = Th[:3] - skew(arm) @ Th[3:]  # (P1): w x arm = -arm x w
+        R = body_transform(mx, mx.bodies[name], azimuth)[:3, :2]
         hcols = pos[sl[h.name].start:sl[h.name].stop]
         N[np.ix_([sl[name].start, sl[name].start + 1], hcols)] = np.linalg.pinv(R) @ G
 

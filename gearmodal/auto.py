@@ -10,7 +10,7 @@ it (a turbine scene's ``dt`` snapped to the nearest whole fraction of its aerody
 The exact method finds every event whatever ``dt``; the step sets the output sampling of the
 peaks and, in a turbine scene, the load hold between aerodynamic steps. Of every rung
 the quantities engineers use are taken (:data:`QUANTITIES`, from
-:func:`gearmodal.studies.summarize`), and
+:func:`gearmodal.summary.summarize`), and
 
     d(l, m) = max over the quantities of |Q_l - Q_m| / |Q_m|                          (A1)
 
@@ -63,6 +63,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import ModelError
+from .summary import summarize
 
 #: the quantities of the paper's double-contact study compared between rungs
 QUANTITIES = ("max_front_force_N", "max_planet_bearing_force_N", "double_contact_time_s",
@@ -254,7 +255,7 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     tol : relative tolerance on every quantity, > 0 (0.05 = 5 %).
     coarsest : rung 0's settings are this many times the scene's (>= 1).
     levels : at most this many rungs are run (3 to 12); each halves the previous one's.
-    quantities : keys of :func:`gearmodal.studies.summarize` compared.
+    quantities : keys of :func:`gearmodal.summary.summarize` compared.
     progress : ``progress(rung, settings, row)`` after each rung (CLI, studies).
     keep_all : keep every rung's result in ``choice.results`` (memory: a turbine run each);
         by default only the chosen one is kept. Rungs loaded from ``store`` have ``None``.
@@ -262,7 +263,6 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
         with the same scene and store resumes (module docstring, "Resume"). The table's
         ``cached`` column says which rungs were loaded.
     """
-    from .studies import summarize
 
     if not isinstance(tol, (int, float)) or isinstance(tol, bool) or not 0 < tol < 10:
         raise ModelError("tol", f"= {tol!r}: must be a relative tolerance in (0, 10)")

@@ -45,8 +45,9 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from .assembly import Assembly, Contacts, _body_transform, _centre, _rz
+from .assembly import Assembly, Contacts
 from .errors import ModelError
+from .frames import body_transform, centre, rz
 from .kernels.joint import joint_gradients_at, joint_residual
 from .model.components import DIRECTIONS
 from .model.model import Model
@@ -318,13 +319,13 @@ class Joint(Constraint):
         """Freeze the joint geometry at input azimuth ``azimuth`` (rad)."""
         ma, ba, _ = self._a
         fa = ma.frames[ba.frame]
-        pa = _rz(fa.speed_ratio * azimuth) @ np.asarray(self.at)
-        ca = _centre(ma, ba, azimuth)
-        self._Ta = _body_transform(ma, ba, azimuth)
+        pa = rz(fa.speed_ratio * azimuth) @ np.asarray(self.at)
+        ca = centre(ma, ba, azimuth)
+        self._Ta = body_transform(ma, ba, azimuth)
         if self._b is not None:
             mb, bb, _ = self._b
-            cb = _centre(mb, bb, azimuth)
-            self._Tb = _body_transform(mb, bb, azimuth)
+            cb = centre(mb, bb, azimuth)
+            self._Tb = body_transform(mb, bb, azimuth)
         else:
             cb = np.zeros(3)
         pb = ca + pa - cb

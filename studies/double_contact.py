@@ -23,7 +23,8 @@ import pandas as pd
 
 import gearmodal as gm
 from gearmodal.report import tooth_force_figure, write_study_report
-from gearmodal.studies import SUMMARY_COLUMNS, load_table, summarize
+from gearmodal.studies import load_table
+from gearmodal.summary import SUMMARY_COLUMNS, summarize
 
 HERE = Path(__file__).resolve().parent
 SCENE = HERE / "scenes" / "600kw_turbine_10ms.toml"

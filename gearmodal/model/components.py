@@ -25,6 +25,8 @@ from ..errors import ModelError
 from . import validate as v
 from .clearance import MAX_RAMPS
 
+#: name of the non-rotating frame every model has
+GROUND = "ground"
 DOF_LEVELS = ("torsional", "planar", "full")
 #: local coordinates of each level, as indices into (x, y, z, rx, ry, theta)
 LEVEL_INDICES = {"torsional": (5,), "planar": (0, 1, 5), "full": (0, 1, 2, 3, 4, 5)}

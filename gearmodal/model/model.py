@@ -10,9 +10,7 @@ from __future__ import annotations
 import copy
 
 from ..errors import ModelError
-from .components import LEVEL_INDICES, Bearing, Body, Frame, Mesh
-
-GROUND = "ground"
+from .components import GROUND, LEVEL_INDICES, Bearing, Body, Frame, Mesh
 
 #: load name suffix -> index into the global (fx, fy, fz, mx, my, mz) of the body's centre
 LOAD_KINDS = {"force_x": 0, "force_y": 1, "force_z": 2, "moment_x": 3, "moment_y": 4,
