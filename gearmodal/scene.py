@@ -35,7 +35,7 @@ The turbine in wind, simulated together with the gearbox model of ``scene.model`
 (:func:`gearmodal.turbine.simulate_drivetrain`)::
 
     [turbine]
-    file = "../models/600kw_turbine.toml"
+    file = "../turbines/600kw_turbine.toml"
     rotor_speed0_rpm = 6.0               # start-up from low speed; the generator cuts in
     connected = false
     mounting_azimuth_deg = 0.0           # overrides the turbine file's

@@ -28,7 +28,7 @@ from gearmodal.turbine import load_turbine
 
 HERE = Path(__file__).resolve().parent
 MODEL = HERE / "models" / "planetary_clearance.toml"
-TURBINE = HERE / "models" / "600kw_turbine.toml"
+TURBINE = HERE / "turbines" / "600kw_turbine.toml"
 G = 9.81  # m/s^2
 TORQUE = 2.6e5  # N m: 600 kW at 22 rpm
 # carrier bearing per case: the reference's, or (None) the model file's own 'clearance' fault

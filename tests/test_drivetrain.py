@@ -11,7 +11,7 @@ from gearmodal.cli import main
 from gearmodal.scene import load_scene
 from gearmodal.turbine import simulate_drivetrain, simulate_turbine
 
-TURBINE = "studies/models/600kw_turbine.toml"
+TURBINE = "studies/turbines/600kw_turbine.toml"
 GEARBOX = "studies/models/600kw.toml"
 
 

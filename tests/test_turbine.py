@@ -8,7 +8,7 @@ import pytest
 import gearmodal as gm
 from gearmodal.turbine import Airfoil, InductionGenerator, Wind, load_turbine, simulate_turbine
 
-TOML = "studies/models/600kw_turbine.toml"
+TOML = "studies/turbines/600kw_turbine.toml"
 
 
 def test_viterna_polar_is_continuous_and_reaches_the_flat_plate():

@@ -1,7 +1,7 @@
 """The turbine side (DESIGN 2.5): wind, rotor aerodynamics, generator, start-up and operation.
 
 >>> import gearmodal as gm
->>> tb = gm.turbine.load_turbine("studies/models/600kw_turbine.toml")
+>>> tb = gm.turbine.load_turbine("studies/turbines/600kw_turbine.toml")
 >>> run = gm.turbine.simulate_turbine(tb, gm.turbine.Wind(mean_speed=10.0), 20.0)
 >>> 10.0 < run.cut_in_time < 14.0
 True

@@ -94,7 +94,7 @@ def mark_cut_in(axs, cut_in_time: float | None) -> None:
 
 
 def load_turbine(path) -> Turbine:
-    """A :class:`Turbine` from a TOML file (``studies/models/600kw_turbine.toml``)."""
+    """A :class:`Turbine` from a TOML file (``studies/turbines/600kw_turbine.toml``)."""
     p = Path(path)
     try:
         d = tomllib.loads(p.read_text())
