@@ -4,7 +4,7 @@ Floating-frame gear models (torsional, planar or full DOF per component), assemb
 piecewise-linear contact model, modal and Campbell analysis. SI units throughout.
 """
 
-from . import auto, io, turbine  # noqa: F401  (gm.io.read_loads, gm.turbine.Wind, ...)
+from . import auto, examples, io, turbine  # noqa: F401  (gm.io.read_loads, gm.turbine.Wind, ...)
 from .assembly import Assembly, assemble
 from .auto import FidelityChoice
 from .auto import choose as choose_fidelity
@@ -38,6 +38,7 @@ from .model import (
     parallel_stage,
     planetary_stage,
 )
+from .model.dump import dump, dumps
 from .model.toml_io import load, loads
 from .static import Equilibrium, balance, equilibrium
 from .studies import sweep
@@ -51,5 +52,6 @@ __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Const
            "SimulationResult", "simulate",
            "assemble", "balance", "campbell", "choose_fidelity", "drivetrain", "equilibrium",
            "gear_pair",
-           "lin_parker_stage", "load", "loads", "modal", "parallel_stage", "planetary_stage",
+           "lin_parker_stage", "load", "loads", "dump", "dumps", "modal", "parallel_stage",
+           "planetary_stage",
            "sweep"]

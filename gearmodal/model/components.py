@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from ..errors import ModelError
 from . import validate as v
 from .clearance import MAX_RAMPS
+from .schema import REQUIRED, Field, Table
 
 #: name of the non-rotating frame every model has
 GROUND = "ground"
@@ -370,3 +371,98 @@ def Shaft(name: str, a: str, b: str, stiffness: float, damping: float = 0.0) -> 
     k = v.nonnegative(f"{name}.stiffness", stiffness, "N m/rad")
     c = v.nonnegative(f"{name}.damping", damping, "N m s/rad")
     return Bearing(name, a, b, stiffness={"theta": k}, damping={"theta": c} if c else {})
+
+
+# -- file schema of each component (gearmodal.model.schema; the "components" model files) ----
+_NAME = Field("name", "name", default=REQUIRED, doc="unique name; dots separate the prefixes "
+              "a drivetrain adds (`stage1.sun`)")
+_BODY_FIELDS = (
+    _NAME,
+    Field("mass", "number", "kg", low=0.0, low_open=True, default=REQUIRED, doc="mass"),
+    Field("inertia", "number", "kg m^2", low=0.0, low_open=True, default=REQUIRED,
+          doc="polar moment of inertia about the body's own axis"),
+    Field("inertia_diametral", "number", "kg m^2", low=0.0, low_open=True,
+          doc="moment of inertia about a diameter (default inertia / 2; full level only)"),
+    Field("dofs", "choice", choices=DOF_LEVELS, default="torsional",
+          doc="DOF level: which local coordinates exist"),
+    Field("frame", "name", default=GROUND, doc="frame the body's coordinates are in"),
+    Field("position", "vector", "m", lengths=(2, 3), default=(0.0, 0.0, 0.0),
+          doc="centre in its frame, [x, y, z]"),
+    Field("orientation", "angle", "rad", default=0.0,
+          doc="angle of the local axes about z in the frame"),
+    Field("speed_ratio", "number", default=0.0,
+          doc="nominal spin over the input speed (sign = sense)"),
+    Field("rotation_scale", "number", "m", low=0.0, low_open=True,
+          doc="rotation coordinate u = rotation_scale * theta (Lin & Parker's u = r theta)"),
+    Field("coordinate_names", "names", default={},
+          doc="renamed local coordinates, e.g. {x = \"zeta\"}"),
+    Field("pinned_to", "name", doc="body whose pin carries this torsional body's centre"),
+)
+Frame.SCHEMA = Table("frames", (
+    _NAME, Field("speed_ratio", "number", default=0.0,
+                 doc="rotation about global z over the input speed (0: not rotating)")),
+    "A reference frame (`[[frames]]`); the ground frame exists in every model.")
+RigidBody.SCHEMA = Table("bodies (kind = \"rigid\")", _BODY_FIELDS,
+                         "A rigid body that is not a gear (carrier, housing, rotor...).",
+                         extra_keys=("kind",))
+Body.SCHEMA = Table("bodies (kind = \"body\")", _BODY_FIELDS, "A plain rigid body.",
+                    extra_keys=("kind",))
+Gear.SCHEMA = Table("bodies (kind = \"gear\")", (
+    _NAME,
+    Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth"),
+    Field("module", "number", "m", low=0.0, low_open=True, high=1.0, default=REQUIRED,
+          doc="normal module (10 mm = 0.010)"),
+    Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 4, high_open=True,
+          default=REQUIRED, doc="normal pressure angle"),
+    Field("helix_angle", "angle", "rad", low=-math.pi / 4, high=math.pi / 4, high_open=True,
+          default=0.0, doc="helix angle, signed (positive = right hand)"),
+    Field("face_width", "number", "m", low=0.0, low_open=True, doc="face width"),
+    Field("internal", "boolean", default=False, doc="internal teeth (a ring)"),
+    *_BODY_FIELDS[1:]), "A gear wheel.", extra_keys=("kind",))
+Mesh.SCHEMA = Table("meshes", (
+    _NAME,
+    Field("gear_a", "name", default=REQUIRED, doc="first gear (the ring of an internal pair)"),
+    Field("gear_b", "name", default=REQUIRED, doc="second gear"),
+    Field("stiffness", "number", "N/m", low=0.0, default=REQUIRED,
+          doc="mesh stiffness along the line of action (the mean if alternating)"),
+    Field("backlash", "number", "m", low=0.0, default=0.0, doc="backlash on the line of action"),
+    Field("damping", "number", "N s/m", low=0.0, default=0.0, doc="mesh damping"),
+    Field("side", "integer", low=-1, high=1, default=1,
+          doc="+1 or -1: which line of action is the front flank"),
+    Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 2, high_open=True,
+          doc="transverse pressure angle (default: from the gears)"),
+    Field("base_radii", "vector", "m", lengths=(2,), low=0.0,
+          doc="[a, b] base radii (default: from the gears)"),
+    Field("helix_angle", "angle", "rad", doc="base helix angle (default: from the gears)"),
+    Field("internal", "boolean", doc="internal pair (default: gear_a is an internal gear)"),
+    Field("alternation", "boolean", default=False,
+          doc="stiffness alternates between single and double tooth-pair contact"),
+    Field("contact_ratio", "number", low=1.0, high=2.0, low_open=True, high_open=True,
+          doc="transverse contact ratio (default: from the gears)"),
+    Field("stiffness_ratio", "number", low=1.0, high=10.0, default=1.75,
+          doc="double-pair over single-pair stiffness"),
+    Field("phase", "number", default=0.0,
+          doc="fraction of a mesh period elapsed at input azimuth 0")),
+    "A gear mesh with two compression-only flanks and backlash (`[[meshes]]`).")
+Bearing.SCHEMA = Table("bearings", (
+    _NAME,
+    Field("a", "name", default=REQUIRED, doc="body a"),
+    Field("b", "name", doc="body b (default: the ground)"),
+    Field("stiffness", "directions", "N/m or N m/rad", low=0.0, default={},
+          doc="per direction x, y, z, rx, ry, theta"),
+    Field("damping", "directions", "N s/m or N m s/rad", low=0.0, default={},
+          doc="per direction"),
+    Field("clearance", "directions", "m or rad", low=0.0, default={},
+          doc="dead band on each side, per direction"),
+    Field("at", "vector", "m", lengths=(2, 3), default=(0.0, 0.0, 0.0),
+          doc="point where it acts, from a's centre in a's frame"),
+    Field("axes_angle", "angle", "rad", default=0.0, doc="bearing axes about z"),
+    Field("axes_frame", "name", doc="frame of the bearing axes (default: b's, or the ground)"),
+    Field("clearance_shape", "choice", choices=CLEARANCE_SHAPES, default="axes",
+          doc="how the x/y clearances combine"),
+    Field("facets", "integer", low=3, high=MAX_FACETS, default=16,
+          doc="facets of a polygon clearance"),
+    Field("ramps", "integer", low=1, high=MAX_RAMPS, default=4,
+          doc="contacts per facet of a polygon clearance")),
+    "A spring-damper per direction between bodies a and b, with optional clearance "
+    "(`[[bearings]]`; shafts are bearings on theta).")

@@ -199,12 +199,13 @@ from ..errors import ModelError
 from . import builders
 from . import validate as v
 from .components import Gear, RigidBody
+from .dump import read_components
 from .model import Model
 
 __all__ = ["MODEL_TYPES", "load", "loads"]
 
 MODEL_TYPES = ("drivetrain", "gear_pair", "planetary_stage", "parallel_stage",
-               "lin_parker_stage")
+               "lin_parker_stage", "components")
 STAGE_TYPES = ("planetary", "parallel")
 
 # Keys of each table: key -> (required, what it is). The hint is shown for missing keys.
@@ -689,6 +690,8 @@ def _build(doc: dict, default_name: str | None) -> Model:
     if "model" not in doc:
         raise _err("model", "missing section [model] (with type = "
                             + " | ".join(repr(t) for t in MODEL_TYPES) + ")")
+    if isinstance(doc["model"], dict) and doc["model"].get("type") == "components":
+        return read_components(doc, default_name)  # what gm.dumps writes
     meta = _table("model", doc["model"], _MODEL_KEYS)
     with _at("", ()):
         kind = v.choice("model.type", meta["type"], MODEL_TYPES)
