@@ -37,6 +37,7 @@ from .model import (
     lin_parker_stage,
     parallel_stage,
     planetary_stage,
+    register_element,
 )
 from .model.dump import dump, dumps
 from .model.toml_io import load, loads
@@ -53,5 +54,5 @@ __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Const
            "assemble", "balance", "campbell", "choose_fidelity", "drivetrain", "equilibrium",
            "gear_pair",
            "lin_parker_stage", "load", "loads", "dump", "dumps", "modal", "parallel_stage",
-           "planetary_stage",
+           "planetary_stage", "register_element",
            "sweep"]

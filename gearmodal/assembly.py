@@ -20,25 +20,14 @@ frame against fixed supports are frozen at the input azimuth given to :func:`ass
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
 from .errors import ModelError
-from .frames import body_selector, body_transform, centre, rz, skew
-from .kernels.joint import bearing_gap_jacobians, joint_gradients
-from .kernels.mesh import mesh_gap_jacobian
-from .kernels.wheel import (
-    wheel_centrifugal_force,
-    wheel_centripetal,
-    wheel_gyroscopic,
-    wheel_mass,
-)
-from .model.clearance import polygon_ramps
-from .model.components import DIRECTIONS, GROUND, Gear
-from .model.mesh_stiffness import MeshVariation, variation_of
+from .frames import body_transform, centre, skew
+from .model.mesh_stiffness import MeshVariation
 
 
 @dataclass
@@ -56,6 +45,11 @@ class Contacts:
     ``variation`` lists the mesh flanks whose stiffness alternates at the mesh frequency
     (``Mesh.alternation``, :mod:`gearmodal.model.mesh_stiffness`); their ``stiffness`` here is
     the mean, which the modal and static analyses use.
+
+    The structure, per row, as the element gave it: ``columns`` the result force columns the
+    contact's force adds to (``[(column, weight), ...]``: a flank its ``<mesh>.front``, a
+    dead-band side its direction with sign, a polygon facet its x and y components);
+    ``stage``, ``planet`` (body name) and ``role`` of the element (``""`` where none).
     """
 
     element: list[str] = field(default_factory=list)
@@ -68,10 +62,44 @@ class Contacts:
     nominal: np.ndarray = None
     angle: np.ndarray = None
     variation: MeshVariation | None = None
+    columns: list = None
+    stage: list = None
+    planet: list = None
+    role: list = None
+
+    #: the per-row fields (one entry per contact) besides ``W``
+    ROW_FIELDS = ("element", "contact", "kind", "offset", "stiffness", "damping", "nominal",
+                  "angle", "columns", "stage", "planet", "role")
 
     def __post_init__(self):
+        k = len(self.element)
         if self.angle is None:
-            self.angle = np.full(len(self.element), np.nan)
+            self.angle = np.full(k, np.nan)
+        for name in ("stage", "planet", "role"):
+            if getattr(self, name) is None:
+                setattr(self, name, [""] * k)
+        if self.columns is None:
+            self.columns = [()] * k
+
+    def take(self, rows=None, W: np.ndarray | None = None) -> Contacts:
+        """A copy with only ``rows`` (default all, in order) and, if given, the state map
+        ``W`` (already of those rows): every per-row field follows, the alternating
+        stiffness's rows are renumbered."""
+        idx = np.arange(len(self)) if rows is None else np.asarray(rows, dtype=np.int64)
+        out = {}
+        for name in self.ROW_FIELDS:
+            val = getattr(self, name)
+            out[name] = val[idx] if isinstance(val, np.ndarray) else [val[i] for i in idx]
+        if W is None:
+            W = self.W[idx]
+        var = self.variation
+        if var is not None and len(var):
+            new = -np.ones(len(self), dtype=np.int64)
+            new[idx] = np.arange(len(idx))
+            ok = new[var.rows] >= 0
+            var = MeshVariation(new[var.rows][ok], var.rate[ok], var.phase[ok],
+                                var.double[ok], var.k_single[ok], var.k_double[ok])
+        return Contacts(W=W, variation=var, **out)
 
     def __len__(self) -> int:
         return len(self.element)
@@ -222,9 +250,129 @@ def _acts(w: np.ndarray) -> bool:
     return bool(np.abs(w).max(initial=0.0) > 1e-12)
 
 
+class _Rows:
+    """Rows of one kind (unilateral contacts, linear springs, round clearances) as the
+    elements add them: the columns of :class:`Contacts`."""
+
+    def __init__(self):
+        self.W, self.offset, self.stiffness, self.damping, self.nominal = [], [], [], [], []
+        self.element, self.contact, self.angle, self.columns = [], [], [], []
+        self.stage, self.planet, self.role = [], [], []
+        self.variation = []
+
+    def add(self, w, offset, k, c, nominal, element, label, angle=np.nan, columns=()):
+        self.W.append(w)
+        self.offset.append(offset)
+        self.stiffness.append(k)
+        self.damping.append(c)
+        self.nominal.append(nominal)
+        self.element.append(element.name)
+        self.contact.append(label)
+        self.angle.append(angle)
+        self.columns.append(tuple(columns))
+        self.stage.append(getattr(element, "stage", ""))
+        self.planet.append(getattr(element, "planet", None) or "")
+        self.role.append(getattr(element, "role", ""))
+        return len(self.W) - 1
+
+    def contacts(self, kind, n: int) -> Contacts:
+        k = len(self.W)
+        kinds = kind if isinstance(kind, list) else [kind] * k
+        out = Contacts(
+            element=self.element, contact=self.contact, kind=kinds,
+            W=np.array(self.W) if k else np.zeros((0, n)),
+            offset=np.array(self.offset, dtype=float),
+            stiffness=np.array(self.stiffness, dtype=float),
+            damping=np.array(self.damping, dtype=float),
+            nominal=np.array(self.nominal, dtype=bool), angle=np.array(self.angle, dtype=float),
+            columns=self.columns, stage=self.stage, planet=self.planet, role=self.role)
+        if self.variation:
+            cols = list(zip(*self.variation, strict=True))
+            out.variation = MeshVariation(np.array(cols[0], dtype=np.int64),
+                                          *(np.array(c, dtype=float) for c in cols[1:]))
+        return out
+
+
+class Contributions:
+    """What the elements of a model add up to at one input azimuth: the collector
+    :func:`assemble` hands to each body's and element's ``contribute(ctx)`` (as ROSS's
+    elements each give their matrices and the rotor adds them up).
+
+    Attributes an element reads: ``model``, ``azimuth`` (rad), ``probe`` (a generic azimuth
+    to tell whether a row acts at every azimuth), ``n`` (DOF), ``slices`` (body name -> its
+    coordinates). Arrays it adds to: ``M``, ``G``, ``K_cent``, ``f_cent`` (a body's own
+    block), ``K``, ``C`` (through :meth:`spring`). Rows: :meth:`contact`, :meth:`spring`,
+    :meth:`round_row`; geometry: :meth:`centre`, :meth:`row`.
+    """
+
+    def __init__(self, model, azimuth: float, slices: dict, n: int):
+        self.model, self.azimuth, self.slices, self.n = model, azimuth, slices, n
+        self.probe = azimuth + 1.2345678901
+        self.M, self.G, self.K_cent = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+        self.K, self.C = np.zeros((n, n)), np.zeros((n, n))
+        self.f_cent = np.zeros(n)
+        self.contacts, self.springs, self.round = _Rows(), _Rows(), _Rows()
+        self.kinds: list[str] = []  # of the contacts: "mesh", "bearing"
+        self._transforms: dict = {}
+        self._centres: dict = {}
+
+    def transform(self, body, azimuth: float | None = None) -> np.ndarray:
+        """The body's T (6 x n_b) at ``azimuth`` (default the assembly's)."""
+        az = self.azimuth if azimuth is None else azimuth
+        key = (body.name, az)
+        if key not in self._transforms:
+            self._transforms[key] = body_transform(self.model, body, az)
+        return self._transforms[key]
+
+    def centre(self, body, azimuth: float | None = None) -> np.ndarray:
+        """The body's centre (m, global axes) at ``azimuth`` (default the assembly's)."""
+        az = self.azimuth if azimuth is None else azimuth
+        key = (body.name, az)
+        if key not in self._centres:
+            self._centres[key] = centre(self.model, body, az)
+        return self._centres[key]
+
+    def row(self, parts, azimuth: float | None = None) -> np.ndarray:
+        """A row of the state from ``[(body, J6), ...]``: ``sum J6 @ T_body`` on each body's
+        coordinates (J6: the row's gradient in the body centre's global 6-vector)."""
+        w = np.zeros(self.n)
+        for body, J in parts:
+            w[self.slices[body.name]] += J @ self.transform(body, azimuth)
+        return w
+
+    def contact(self, w, offset: float, k: float, c: float, nominal: bool, element,
+                label: str, kind: str, *, columns, angle: float = np.nan,
+                variation=None) -> int:
+        """A unilateral contact of ``element``: penetration ``w q - offset``, force
+        ``k p + c p'`` while ``p > 0``, added with ``weight`` to each result force column of
+        ``columns`` (``[(column, weight), ...]``); ``variation`` an alternating stiffness
+        ``(rate, phase, double, k_single, k_double)``. Returns the contact's row."""
+        i = self.contacts.add(w, offset, k, c, nominal, element, label, angle, columns)
+        self.kinds.append(kind)
+        if variation is not None:
+            self.contacts.variation.append((i, *variation))
+        return i
+
+    def spring(self, w, k: float, c: float, element, direction: str, acts: bool) -> None:
+        """An always-active spring-damper on the deflection ``w q``: ``k w w^T`` and
+        ``c w w^T``; listed (for its force column ``<element>.<direction>``) if it ``acts``."""
+        self.K += k * np.outer(w, w)
+        self.C += c * np.outer(w, w)
+        if acts:
+            self.springs.add(w, 0.0, k, c, True, element, direction)
+
+    def round_row(self, w, element, label: str, clearance: float, k: float, c: float):
+        """One of the two (x, y) rows of an exactly round clearance (nonlinear: scipy)."""
+        self.round.add(w, clearance, k, c, False, element, label)
+
+
 def assemble(model, azimuth: float = 0.0) -> Assembly:
     """Assemble ``model`` at input azimuth ``azimuth`` (rad; geometry of frames turning against
     each other is frozen there). Returns an :class:`Assembly`.
+
+    Each body adds its inertia, each element (mesh, bearing...: ``model.elements()``) its
+    rows, through ``contribute(ctx)`` on a :class:`Contributions`; loads are unit forces and
+    moments at the body centres.
     """
     model.check()
     pinned = [b.name for b in model.bodies.values()
@@ -238,198 +386,32 @@ def assemble(model, azimuth: float = 0.0) -> Assembly:
         slices[b.name] = slice(start, start + nb)
         start += nb
     n = start
-    M = np.zeros((n, n))
-    G = np.zeros((n, n))
-    Kc = np.zeros((n, n))
-    fc = np.zeros(n)
-    T = {b.name: body_transform(model, b, azimuth) for b in bodies}
-    centres = {b.name: centre(model, b, azimuth) for b in bodies}
-
-    # Inertia of each wheel: the local block of the floating-frame kernels (DESIGN 2.1).
+    ctx = Contributions(model, azimuth, slices, n)
     for b in bodies:
-        sl = slices[b.name]
-        S = body_selector(b)
-        args = (b.mass, b.inertia_diametral, b.inertia, *b.position, b.orientation)
-        of = model.frames[b.frame].speed_ratio
-        M[sl, sl] = S.T @ wheel_mass(*args)[6:, 6:] @ S
-        G[sl, sl] = S.T @ wheel_gyroscopic(*args, of, b.speed_ratio)[6:, 6:] @ S
-        Kc[sl, sl] = S.T @ wheel_centripetal(*args, of, b.speed_ratio)[6:, 6:] @ S
-        fc[sl] = S.T @ wheel_centrifugal_force(*args, of, b.speed_ratio)[6:]
-
-    K = np.zeros((n, n))
-    C = np.zeros((n, n))
-    rows, offs, ks, cs, noms, elems, labels, kinds = [], [], [], [], [], [], [], []
-    angles = []
-    lin_rows, lin_k, lin_c, lin_elem, lin_dir = [], [], [], [], []
-    rnd = {"W": [], "element": [], "contact": [], "offset": [], "k": [], "c": []}
-
-    def add_contact(w, off, k, c, nominal, elem, label, kind, angle=np.nan):
-        angles.append(angle)
-        rows.append(w)
-        offs.append(off)
-        ks.append(k)
-        cs.append(c)
-        noms.append(nominal)
-        elems.append(elem)
-        labels.append(label)
-        kinds.append(kind)
-
-    # Meshes: two flanks on mirrored lines of action (DESIGN 2.2).
-    var_rows = []  # alternating mesh stiffness (Mesh.alternation): (row, rate, phase, ...)
-    for m in model.meshes.values():
-        a, b = model.bodies[m.gear_a], model.bodies[m.gear_b]
-        if m.internal is not None:
-            internal = 1.0 if m.internal else 0.0
-        else:
-            internal = 1.0 if isinstance(a, Gear) and a.internal else 0.0
-        if m.base_radii is not None:
-            rba, rbb = (float(r) for r in m.base_radii)
-        else:
-            rba, rbb = a.base_radius, b.base_radius
-        if m.pressure_angle is not None:
-            alpha = m.pressure_angle
-        else:
-            g = b if isinstance(b, Gear) else a
-            alpha = g.transverse_pressure_angle
-        if m.helix_angle is not None:
-            beta_b = m.helix_angle
-        else:
-            beta_b = a.base_helix_angle if isinstance(a, Gear) else 0.0
-        ca, cb = centres[a.name], centres[b.name]
-        if np.hypot(*(cb - ca)[:2]) == 0.0:
-            raise ModelError(m.name, f"gears {a.name!r} and {b.name!r} have the same centre")
-        for flank, side, off in (("front", m.side, 0.0), ("back", -m.side, m.backlash)):
-            J = mesh_gap_jacobian(ca[0], ca[1], cb[0], cb[1], rba, rbb, alpha, beta_b,
-                                  float(side), internal)
-            w = np.zeros(n)
-            w[slices[a.name]] += J[:6] @ T[a.name]
-            w[slices[b.name]] += J[6:] @ T[b.name]
-            if np.any(w):
-                if m.alternation:
-                    var_rows.append((len(rows), *variation_of(model, m, a, b, bool(internal))))
-                add_contact(w, off, m.stiffness, m.damping, flank == "front", m.name, flank,
-                            "mesh")
-
-    # Bearings, supports and shafts with per-direction dead bands (DESIGN 2.3).
-    def bearing_jacobians(br, az, T_, centres_):
-        a = model.bodies[br.a]
-        b = model.bodies[br.b] if br.b is not None else None
-        fa = model.frames[a.frame]
-        pa = rz(fa.speed_ratio * az) @ np.asarray(br.at, dtype=float)
-        cb = centres_[b.name] if b is not None else np.zeros(3)
-        pb = centres_[a.name] + pa - cb
-        axes_frame = br.axes_frame or (b.frame if b is not None else GROUND)
-        gamma = model.frames[axes_frame].speed_ratio * az + br.axes_angle
-        Ga, Gb = joint_gradients(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2], gamma)
-        Ja, Jb = bearing_gap_jacobians(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2], gamma)
-
-        def row(Ra, Rb, j):
-            w = np.zeros(n)
-            w[slices[a.name]] += Ra[j] @ T_[a.name]
-            if b is not None:
-                w[slices[b.name]] += Rb[j] @ T_[b.name]
-            return w
-        return lambda j: row(Ga, Gb, j), lambda j: row(Ja, Jb, j)
-
-    # A direction that acts on no DOF present at these levels is left out; whether it acts is
-    # decided at this azimuth and at a generic one, so that every azimuth of a turning frame
-    # gives the same rows (a torsional carrier's pin moves along x except where sin = 0)
-    probe = azimuth + 1.2345678901
-    T2 = {b.name: body_transform(model, b, probe) for b in bodies}
-    centres2 = {b.name: centre(model, b, probe) for b in bodies}
-    for br in model.bearings.values():
-        spring_row, gap_row = bearing_jacobians(br, azimuth, T, centres)
-        spring_row2, gap_row2 = bearing_jacobians(br, probe, T2, centres2)
-        radial, acts = (), False
-        if br.clearance_shape != "axes":  # x and y make one radial clearance
-            radial = ("x", "y")
-            gx, gy = gap_row(0), gap_row(2)  # the x and y deflection rows (joint.py)
-            acts = _acts(gx) or _acts(gy) or _acts(gap_row2(0)) or _acts(gap_row2(2))
-        if br.clearance_shape == "polygon":
-            # facet i: the deflection along its normal (cos a_i, sin a_i) in the bearing axes,
-            # with the ramps of clearance.polygon_ramps (R2); damping shared in proportion to
-            # stiffness
-            if acts:
-                kr, cr = br.stiffness["x"], br.damping.get("x", 0.0)
-                offsets, kms = polygon_ramps(br.clearance["x"], kr, br.facets, br.ramps)
-                for i in range(br.facets):
-                    a_i = 2.0 * math.pi * i / br.facets
-                    w = math.cos(a_i) * gx + math.sin(a_i) * gy
-                    for m_, (o, km) in enumerate(zip(offsets, kms, strict=True)):
-                        add_contact(w, o, km, cr * km / kr if kr else 0.0, False, br.name,
-                                    f"facet{i}_{m_}", "bearing", a_i)
-        elif br.clearance_shape == "round":
-            # (R1) of clearance.py on the x and y deflection rows
-            if acts:
-                for lab, w in (("x", gx), ("y", gy)):
-                    rnd["W"].append(w)
-                    rnd["element"].append(br.name)
-                    rnd["contact"].append(lab)
-                    rnd["offset"].append(br.clearance["x"])
-                    rnd["k"].append(br.stiffness["x"])
-                    rnd["c"].append(br.damping.get("x", 0.0))
-        for key, k in br.stiffness.items():
-            if key in radial:
-                continue
-            i = DIRECTIONS.index(key)
-            c = br.damping.get(key, 0.0)
-            gap = br.clearance.get(key, 0.0)
-            if gap == 0.0:
-                # no dead band: a linear spring on the joint deflection g_i
-                w = spring_row(i)
-                K += k * np.outer(w, w)
-                C += c * np.outer(w, w)
-                if _acts(w) or _acts(spring_row2(i)):
-                    lin_rows.append(w)
-                    lin_k.append(k)
-                    lin_c.append(c)
-                    lin_elem.append(br.name)
-                    lin_dir.append(key)
-                continue
-            for j, side in ((2 * i, "+"), (2 * i + 1, "-")):
-                w = gap_row(j)
-                if _acts(w) or _acts(gap_row2(j)):
-                    add_contact(w, gap, k, c, side == "+", br.name, f"{key}{side}",
-                                "bearing")
+        b.contribute(ctx)
+    for element in model.elements():
+        element.contribute(ctx)
 
     # Loads by name: generalised force of a unit force/moment at the body centre.
     load_names, cols = [], []
     for b in bodies:
+        T = ctx.transform(b)
         for lname, idx in model.load_directions(b):
             col = np.zeros(n)
-            col[slices[b.name]] = T[b.name][idx]
+            col[slices[b.name]] = T[idx]
             if lname.endswith(".force_u"):
                 col[slices[b.name]] *= b.rotation_scale
             load_names.append(lname)
             cols.append(col)
     B = np.array(cols).T if cols else np.zeros((n, 0))
-
-    nc = len(rows)
-    contacts = Contacts(
-        element=elems, contact=labels, kind=kinds,
-        W=np.array(rows) if nc else np.zeros((0, n)),
-        offset=np.array(offs, dtype=float), stiffness=np.array(ks, dtype=float),
-        damping=np.array(cs, dtype=float), nominal=np.array(noms, dtype=bool),
-        angle=np.array(angles, dtype=float))
-    if var_rows:
-        cols = list(zip(*var_rows, strict=True))
-        contacts.variation = MeshVariation(np.array(cols[0], dtype=np.int64),
-                                           *(np.array(c, dtype=float) for c in cols[1:]))
-    nl = len(lin_rows)
-    springs = Contacts(
-        element=lin_elem, contact=lin_dir, kind=["spring"] * nl,
-        W=np.array(lin_rows) if nl else np.zeros((0, n)), offset=np.zeros(nl),
-        stiffness=np.array(lin_k, dtype=float), damping=np.array(lin_c, dtype=float),
-        nominal=np.ones(nl, dtype=bool))
-    nr = len(rnd["W"])
-    round_ = None if not nr else Contacts(
-        element=rnd["element"], contact=rnd["contact"], kind=["round"] * nr,
-        W=np.array(rnd["W"]), offset=np.array(rnd["offset"], dtype=float),
-        stiffness=np.array(rnd["k"], dtype=float), damping=np.array(rnd["c"], dtype=float),
-        nominal=np.zeros(nr, dtype=bool))
-    return Assembly(dof_names=model.dof_names, load_names=load_names, M=M, C=C, K=K, G=G,
-                    K_cent=Kc, f_cent=fc, B=B, contacts=contacts, azimuth=azimuth,
-                    body_slices=slices, springs=springs, round=round_)
+    contacts = ctx.contacts.contacts(ctx.kinds, n)
+    springs = ctx.springs.contacts("spring", n)
+    nr = len(ctx.round.W)
+    round_ = ctx.round.contacts("round", n) if nr else None
+    return Assembly(dof_names=model.dof_names, load_names=load_names, M=ctx.M, C=ctx.C,
+                    K=ctx.K, G=ctx.G, K_cent=ctx.K_cent, f_cent=ctx.f_cent, B=B,
+                    contacts=contacts, azimuth=azimuth, body_slices=slices, springs=springs,
+                    round=round_)
 
 
 def _on_pins(model, pinned: list[str], azimuth: float) -> Assembly:
@@ -475,18 +457,7 @@ def _on_pins(model, pinned: list[str], azimuth: float) -> Assembly:
             return None
         W = proj(c.W, left=False)
         rows = [i for i in range(len(c)) if _acts(W[i])]
-        new = -np.ones(len(c), dtype=np.int64)
-        new[rows] = np.arange(len(rows))
-        var = c.variation
-        if var is not None and len(var):
-            ok = new[var.rows] >= 0
-            var = MeshVariation(new[var.rows][ok], var.rate[ok], var.phase[ok],
-                                var.double[ok], var.k_single[ok], var.k_double[ok])
-        return Contacts(element=[c.element[i] for i in rows],
-                        contact=[c.contact[i] for i in rows], kind=[c.kind[i] for i in rows],
-                        W=W[rows].reshape(len(rows), len(idx)), offset=c.offset[rows],
-                        stiffness=c.stiffness[rows], damping=c.damping[rows],
-                        nominal=c.nominal[rows], angle=c.angle[rows], variation=var)
+        return c.take(rows, W[rows].reshape(len(rows), len(idx)))
 
     def proj(X: np.ndarray, left: bool = True, right: bool = True) -> np.ndarray:
         """N^T X N (or one side); entries below 1e-13 of X's largest are the rounding of

@@ -374,11 +374,7 @@ class CoupledAssembly(Assembly):
             def red(c: Contacts | None):
                 if c is None:
                     return None
-                return Contacts(element=list(c.element), contact=list(c.contact),
-                                kind=list(c.kind), W=c.W @ N, offset=c.offset.copy(),
-                                stiffness=c.stiffness.copy(), damping=c.damping.copy(),
-                                nominal=c.nominal.copy(), angle=c.angle.copy(),
-                                variation=c.variation)
+                return c.take(W=c.W @ N)
 
             self._reduced = Assembly(
                 dof_names=[self.dof_names[i] for i in self.independent],
@@ -605,10 +601,7 @@ class Coupled:
             if c is None:
                 return None
             W = c.W if c.W is not None else np.zeros((0, n0))
-            return Contacts(element=list(c.element), contact=list(c.contact),
-                            kind=list(c.kind), W=grow(W, W.shape[0], n), offset=c.offset,
-                            stiffness=c.stiffness, damping=c.damping, nominal=c.nominal,
-                            angle=c.angle, variation=c.variation)
+            return c.take(W=grow(W, W.shape[0], n))
 
         for c in self.constraints:
             if isinstance(c, Joint):

@@ -12,8 +12,8 @@ import pytest
 
 import gearmodal as gm
 from gearmodal.errors import ModelError
+from gearmodal.model import Bearing, RigidBody
 from gearmodal.model.clearance import force_law_error, polygon_ramps, ramp_force, ridge_force
-from gearmodal.model.components import Bearing, RigidBody
 
 C, K = 1e-3, 1e6  # m, N/m
 ROOT = Path(__file__).resolve().parents[1]

@@ -84,6 +84,7 @@ def test_bad_flags_and_scene_values_are_refused_by_name(tmp_path, capsys):
     turb = tmp_path / "t.toml"
     text = open("studies/scenes/600kw_turbine_10ms.toml").read()
     text = text.replace('"../models/', '"' + str(Path("studies/models").resolve()) + "/")
+    text = text.replace('"../turbines/', '"' + str(Path("studies/turbines").resolve()) + "/")
     text = text.replace("connected = false", 'connected = "false"')
     turb.write_text(text)
     assert main(["simulate", str(turb), "--out", out]) == 2

@@ -14,8 +14,7 @@ import numpy as np
 import pytest
 
 from gearmodal.errors import ModelError
-from gearmodal.model import builders
-from gearmodal.model.components import Bearing, Gear, Mesh, RigidBody, Shaft
+from gearmodal.model import Bearing, Gear, Mesh, RigidBody, Shaft, builders
 from gearmodal.model.toml_io import load, loads
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -368,17 +368,12 @@ class _Tables:
         # alternating mesh flanks: every contact's stiffness at each time
         K = system.k if self.mesh_k is None else self.mesh_k
         Fc = np.where(S, K * P + system.c * R, 0.0)
-        # one column per mesh flank, one per bearing direction (its two dead-band sides
-        # combined; a polygon's facet forces resolved on the bearing's x and y axes)
+        # the force columns each element gave its contacts (Contacts.columns): one per mesh
+        # flank, one per bearing direction (its two dead-band sides combined; a polygon's
+        # facet forces resolved on the bearing's x and y axes)
         names: dict[str, int] = {}
         cols, rows_, weights = [], [], []
-        for e, (el, ct, kind) in enumerate(zip(c.element, c.contact, c.kind, strict=True)):
-            if kind == "mesh":
-                parts = [(f"{el}.{ct}", 1.0)]
-            elif np.isfinite(c.angle[e]):
-                parts = [(f"{el}.x", math.cos(c.angle[e])), (f"{el}.y", math.sin(c.angle[e]))]
-            else:
-                parts = [(f"{el}.{ct[:-1]}", 1.0 if ct.endswith("+") else -1.0)]
+        for e, parts in enumerate(c.columns):
             for key, wgt in parts:
                 rows_.append(e)
                 cols.append(names.setdefault(key, len(names)))

@@ -14,7 +14,9 @@ import math
 
 from ..errors import ModelError
 from . import validate as v
-from .components import DOF_LEVELS, Bearing, Frame, Gear, Mesh, RigidBody, Shaft
+from .bearing import Bearing, Shaft
+from .components import DOF_LEVELS, Frame, Gear, RigidBody
+from .mesh import Mesh
 from .model import Model
 
 _CENTRAL = ("carrier", "ring", "sun")
@@ -134,20 +136,20 @@ def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
         raise ModelError("gear_pair", "both gears of a gear_pair must be external")
     _same_tooth_system("gear_pair.wheel", p, w)
     centre = (p.base_radius + w.base_radius) / math.cos(p.transverse_pressure_angle)
-    p.position, p.speed_ratio = (0.0, 0.0, 0.0), 1.0
-    w.position, w.speed_ratio = (centre, 0.0, 0.0), -p.teeth / w.teeth
+    p.position, p.speed_ratio, p.role = (0.0, 0.0, 0.0), 1.0, "pinion"
+    w.position, w.speed_ratio, w.role = (centre, 0.0, 0.0), -p.teeth / w.teeth, "wheel"
     m = Model("gear_pair", input="pinion")
     m.add(p)
     m.add(w)
     m.add(Mesh("mesh", "pinion", "wheel", mesh_stiffness, backlash, mesh_damping, side=1,
-               **_alternation("gear_pair.mesh_alternation", mesh_alternation)))
+               role="mesh", **_alternation("gear_pair.mesh_alternation", mesh_alternation)))
     if dofs != "torsional":
         if bearing_stiffness is None:
             raise ModelError("gear_pair.bearing_stiffness", f"required for dofs={dofs!r} "
                              "(N/m): the wheels' centres need a support")
         for g in ("pinion", "wheel"):
             s = _support("gear_pair.bearing_stiffness", bearing_stiffness, dofs)
-            m.add(Bearing(f"{g}_bearing", g, None, **s))
+            m.add(Bearing(f"{g}_bearing", g, None, role=f"{g}_bearing", **s))
     return m.check()
 
 
@@ -213,31 +215,33 @@ def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing:
     for b in _CENTRAL:
         r = radius[b]
         m.add(RigidBody(name=b, mass=mass[b], inertia=_iorr(f"{b}", inertia_over_r2[b], r),
-                        dofs="planar", frame="carrier", rotation_scale=r, speed_ratio=1.0))
+                        dofs="planar", frame="carrier", rotation_scale=r, speed_ratio=1.0,
+                        role=b))
     for n, p in enumerate(psi, start=1):
         m.add(RigidBody(name=f"planet{n}", mass=mass["planet"],
                         inertia=_iorr("planet", inertia_over_r2["planet"], r_p),
                         dofs="planar", frame="carrier", rotation_scale=r_p, speed_ratio=1.0,
                         position=(r_c * math.cos(p), r_c * math.sin(p), 0.0), orientation=p,
-                        coordinate_names={"x": "zeta", "y": "eta"}))
+                        coordinate_names={"x": "zeta", "y": "eta"}, role="planet"))
     for b in _CENTRAL:
         k = v.nonnegative(f"lin_parker_stage.bearing.{b}", bearing[b], "N/m")
         ku = v.nonnegative(f"lin_parker_stage.torsional.{b}", torsional[b], "N/m")
         m.add(Bearing(f"{b}_support", b, None,
-                      stiffness={"x": k, "y": k, "theta": ku * radius[b] ** 2}))
+                      stiffness={"x": k, "y": k, "theta": ku * radius[b] ** 2},
+                      role=f"{b}_support"))
     kp = v.nonnegative("lin_parker_stage.bearing.planet", bearing["planet"], "N/m")
     ksp = v.nonnegative("lin_parker_stage.mesh.sun_planet", mesh["sun_planet"], "N/m")
     krp = v.nonnegative("lin_parker_stage.mesh.ring_planet", mesh["ring_planet"], "N/m")
     for n, p in enumerate(psi, start=1):
         pl = f"planet{n}"
         m.add(Bearing(f"{pl}_bearing", pl, "carrier", stiffness={"x": kp, "y": kp},
-                      axes_angle=p))
+                      axes_angle=p, role="planet_bearing", planet=pl))
         m.add(Mesh(f"sun_{pl}", "sun", pl, ksp, backlash, mesh_damping, side=1,
                    pressure_angle=a_s, base_radii=(radius["sun"], r_p), helix_angle=0.0,
-                   internal=False))
+                   internal=False, role="sun_planet", planet=pl))
         m.add(Mesh(f"ring_{pl}", "ring", pl, krp, backlash, mesh_damping, side=1,
                    pressure_angle=a_r, base_radii=(radius["ring"], r_p), helix_angle=0.0,
-                   internal=True))
+                   internal=True, role="ring_planet", planet=pl))
     m.groups["planets"] = [f"planet{n}" for n in range(1, n_planets + 1)]
     return m.check()
 
@@ -319,9 +323,9 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
     m.add(Frame("carrier", 1.0))
     carrier = RigidBody(name="carrier", mass=carrier_mass, inertia=carrier_inertia,
                         inertia_diametral=carrier_inertia_diametral, dofs=dofs,
-                        frame="carrier", speed_ratio=1.0)
+                        frame="carrier", speed_ratio=1.0, role="carrier")
     for g, ratio in ((s, 1.0 + r.teeth / s.teeth), (r, 0.0)):
-        g.frame, g.speed_ratio = "carrier", ratio
+        g.frame, g.speed_ratio, g.role = "carrier", ratio, g.name
     m.add(carrier)
     m.add(s)
     m.add(r)
@@ -332,28 +336,33 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         pl.orientation = a
         pl.coordinate_names = {"x": "zeta", "y": "eta"}
         pl.pinned_to = "carrier"  # a torsional planet rides on its carrier pin
+        pl.role = "planet"
         m.add(pl)
     for label, spec, body in (("carrier_bearing", carrier_bearing, "carrier"),
                               ("sun_support", sun_support, "sun"),
                               ("ring_support", ring_support, "ring")):
         sup = _support(f"{name}.{label}", spec, dofs)
         if sup["stiffness"]:
-            m.add(Bearing(label, body, None, **sup))
+            m.add(Bearing(label, body, None, role=label, **sup))
     for n, a in enumerate(psi, start=1):
         pl = f"planet{n}"
         sup = _support(f"{name}.planet_bearing", planet_bearing, dofs)
         if sup["stiffness"]:
-            m.add(Bearing(f"{pl}_bearing", pl, "carrier", axes_angle=a, **sup))
+            m.add(Bearing(f"{pl}_bearing", pl, "carrier", axes_angle=a,
+                          role="planet_bearing", planet=pl, **sup))
         # Carrier input: the planets drive the sun and push on the ring on the flanks that a
         # positive carrier rotation closes, i.e. Lin & Parker's mirrored line of action.
         # mesh phases of planet n relative to planet 1 (Parker & Lin 2004): the ring's teeth
         # pass planet n's position z_r psi_n / 2 pi periods later, the sun's z_s psi_n / 2 pi
         # earlier (mesh_stiffness M3)
+        alt = f"{name}.mesh_alternation"
         m.add(Mesh(f"sun_{pl}", "sun", pl, k_sp, backlash, mesh_damping, side=-1,
-                   **_alternation(f"{name}.mesh_alternation", mesh_alternation, "sun_planet",
+                   role="sun_planet", planet=pl,
+                   **_alternation(alt, mesh_alternation, "sun_planet",
                                   -s.teeth * a / (2 * math.pi))))
         m.add(Mesh(f"ring_{pl}", "ring", pl, k_rp, backlash, mesh_damping, side=-1,
-                   **_alternation(f"{name}.mesh_alternation", mesh_alternation, "ring_planet",
+                   role="ring_planet", planet=pl,
+                   **_alternation(alt, mesh_alternation, "ring_planet",
                                   r.teeth * a / (2 * math.pi))))
     m.groups["planets"] = [f"planet{n}" for n in range(1, n_planets + 1)]
     m.output = "sun"
@@ -380,19 +389,19 @@ def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash:
     angle = v.number(f"{name}.angle", angle, "rad")
     x0, y0 = (v.number(f"{name}.position", c, "m") for c in position)
     centre = (g.base_radius + p.base_radius) / math.cos(g.transverse_pressure_angle)
-    g.position, g.speed_ratio = (x0, y0, 0.0), 1.0
+    g.position, g.speed_ratio, g.role, p.role = (x0, y0, 0.0), 1.0, "gear", "pinion"
     p.position = (x0 + centre * math.cos(angle), y0 + centre * math.sin(angle), 0.0)
     p.speed_ratio = -g.teeth / p.teeth
     m = Model(name, input="gear")
     m.add(g)
     m.add(p)
     m.add(Mesh("mesh", "gear", "pinion", mesh_stiffness, backlash, mesh_damping, side=1,
-               **_alternation(f"{name}.mesh_alternation", mesh_alternation)))
+               role="mesh", **_alternation(f"{name}.mesh_alternation", mesh_alternation)))
     for label, spec, body in (("gear_bearing", gear_bearing, "gear"),
                               ("pinion_bearing", pinion_bearing, "pinion")):
         sup = _support(f"{name}.{label}", spec, dofs)
         if sup["stiffness"]:
-            m.add(Bearing(label, body, None, **sup))
+            m.add(Bearing(label, body, None, role=label, **sup))
     m.output = "pinion"
     return m.check()
 
@@ -439,13 +448,13 @@ def drivetrain(rotor: RigidBody, stages: list, *, main_shaft_stiffness: float,
     rot.name = rot.name or "rotor"
     if rot.name != "rotor":
         raise ModelError(f"{name}.rotor.name", "the drivetrain input body is named 'rotor'")
-    rot.speed_ratio = 1.0
+    rot.speed_ratio, rot.role = 1.0, "rotor"
     m.add(rot)
     support = None
     if housing is not None:
         h = copy.deepcopy(housing)
         h.name = "housing"
-        h.speed_ratio = 0.0
+        h.speed_ratio, h.role = 0.0, "housing"
         m.add(h)
         support = "housing"
     ratio, prev_out, prev_centre = 1.0, "rotor", (0.0, 0.0)
@@ -472,12 +481,14 @@ def drivetrain(rotor: RigidBody, stages: list, *, main_shaft_stiffness: float,
         a = f"{sname}.{st.input}"
         if k == 0:
             m.add(Shaft("main_shaft", "rotor", a, main_shaft_stiffness, main_shaft_damping))
+            m.bearings["main_shaft"].role = "main_shaft"
             if shaft_bending is not None:
                 dofs = m.bodies[a].dofs
-                m.add(Bearing("shaft_bending", a, None,
+                m.add(Bearing("shaft_bending", a, None, role="shaft_bending",
                               **_support(f"{name}.shaft_bending", shaft_bending, dofs)))
         else:
             m.add(Shaft(f"coupling{k}", prev_out, a, couplings[k - 1]))
+            m.bearings[f"coupling{k}"].role = "coupling"
         out = st.bodies[st.output]
         ratio = out.speed_ratio
         prev_out = f"{sname}.{st.output}"
@@ -485,15 +496,16 @@ def drivetrain(rotor: RigidBody, stages: list, *, main_shaft_stiffness: float,
     if generator is not None:
         g = copy.deepcopy(generator)
         g.name = "generator"
-        g.speed_ratio = ratio
+        g.speed_ratio, g.role = ratio, "generator"
         m.add(g)
         if hss_stiffness is None:
             raise ModelError(f"{name}.hss_stiffness", "required with a generator (N m/rad)")
         m.add(Shaft("hss_shaft", prev_out, "generator", hss_stiffness, hss_damping))
+        m.bearings["hss_shaft"].role = "hss_shaft"
     if housing is not None:
         if suspension is None:
             raise ModelError(f"{name}.suspension", "required with a housing")
-        m.add(Bearing("suspension", "housing", None,
+        m.add(Bearing("suspension", "housing", None, role="suspension",
                       **_support(f"{name}.suspension", suspension, m.bodies["housing"].dofs)))
     m.output = "generator" if generator is not None else prev_out
     m.gear_ratio = ratio

@@ -31,8 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
-from .components import Bearing, Body, Frame, Gear, Mesh, RigidBody
-from .model import GROUND, Model
+from .components import Body, Frame, Gear, RigidBody
+from .model import ELEMENT_KINDS, GROUND, Model
 from .schema import REQUIRED, Field, Table
 
 __all__ = ["KINDS", "MODEL_TABLE", "dump", "dumps", "read_components", "to_toml"]
@@ -51,8 +51,11 @@ MODEL_TABLE = Table('model (type = "components")', (
           doc="[low, high] operating range of the input")),
     "The model's own data.")
 GROUPS_TABLE = Field("groups", "names", doc="named lists of bodies")
-#: the document's arrays of tables: (key, component class or the body kinds)
-_ARRAYS = (("frames", Frame), ("bodies", None), ("meshes", Mesh), ("bearings", Bearing))
+
+
+def _arrays() -> tuple:
+    """The document's arrays of tables: (key, component class, or None for the bodies)."""
+    return (("frames", Frame), ("bodies", None), *((c.TABLE, c) for c in ELEMENT_KINDS))
 
 
 def dumps(model: Model) -> str:
@@ -82,10 +85,10 @@ def dumps(model: Model) -> str:
     if frames:
         doc["frames"] = [_write(f) for f in frames]
     doc["bodies"] = [{"kind": _kind(b), **_write(b)} for b in model.bodies.values()]
-    if model.meshes:
-        doc["meshes"] = [_write(m) for m in model.meshes.values()]
-    if model.bearings:
-        doc["bearings"] = [_write(b) for b in model.bearings.values()]
+    for cls in ELEMENT_KINDS:
+        table = model.elements_of(cls)
+        if table:
+            doc[cls.TABLE] = [_write(e) for e in table.values()]
     if model.groups:
         doc["groups"] = {k: list(v) for k, v in model.groups.items()}
     return to_toml(doc)
@@ -174,9 +177,9 @@ def read_components(doc: dict, default_name: str | None = None) -> Model:
     """The :class:`Model` of a ``type = "components"`` document (parsed TOML); every error is a
     :class:`ModelError` whose field is the path in the document (``bodies[2].mass``)."""
     for key in doc:
-        if key not in ("model", *(a for a, _ in _ARRAYS), "groups"):
+        if key not in ("model", *(a for a, _ in _arrays()), "groups"):
             raise ModelError(key, "unknown section for type = 'components'; allowed: model, "
-                             + ", ".join(a for a, _ in _ARRAYS) + ", groups")
+                             + ", ".join(a for a, _ in _arrays()) + ", groups")
     meta = MODEL_TABLE.read("model", doc["model"])
     model = Model(meta.get("name", default_name or "model"), input=meta.get("input"),
                   rated_speed_rpm=meta.get("rated_speed_rpm"),
@@ -185,7 +188,7 @@ def read_components(doc: dict, default_name: str | None = None) -> Model:
     model.output = meta.get("output")
     model.gear_ratio = meta.get("gear_ratio")
     paths: dict[str, str] = {}
-    for key, cls in _ARRAYS:
+    for key, cls in _arrays():
         items = doc.get(key, [])
         if not isinstance(items, list) or not all(isinstance(t, dict) for t in items):
             raise ModelError(key, f"expected an array of tables [[{key}]], got "

@@ -10,7 +10,35 @@ from __future__ import annotations
 import copy
 
 from ..errors import ModelError
-from .components import GROUND, LEVEL_INDICES, Bearing, Body, Frame, Mesh
+from .bearing import Bearing
+from .components import DOF_LEVELS, GROUND, LEVEL_INDICES, Body, Frame, Gear
+from .mesh import Mesh
+
+#: the element kinds a model holds, in assembly order: each class adds its own rows
+#: (``contribute``) and names the model's table of them and its file array (``TABLE``)
+ELEMENT_KINDS: list[type] = [Mesh, Bearing]
+
+
+def register_element(cls: type) -> type:
+    """Make ``cls`` an element kind (usable as a class decorator): models then hold its
+    instances in ``model.<cls.TABLE>``, assemble them through ``contribute(ctx)`` (after the
+    kinds registered before) and ``gm.dumps`` / ``gm.load`` write and read them as the array
+    ``[[<cls.TABLE>]]`` with the fields of ``cls.SCHEMA``.
+
+    The class needs ``name``, ``TABLE`` (a new name), ``SCHEMA``
+    (:class:`~gearmodal.model.schema.Table`) and ``contribute(ctx)``
+    (:class:`gearmodal.assembly.Contributions`); its fields of schema type ``name`` (other than
+    ``name``) are body names, prefixed with the rest when a drivetrain merges a stage.
+    """
+    for attr in ("TABLE", "SCHEMA", "contribute"):
+        if not hasattr(cls, attr):
+            raise TypeError(f"an element kind needs {attr}; {cls.__name__} has none")
+    taken = {c.TABLE for c in ELEMENT_KINDS} | {"frames", "bodies", "groups", "model"}
+    if cls not in ELEMENT_KINDS:
+        if cls.TABLE in taken:
+            raise TypeError(f"{cls.__name__}.TABLE = {cls.TABLE!r} is already used")
+        ELEMENT_KINDS.append(cls)
+    return cls
 
 #: load name suffix -> index into the global (fx, fy, fz, mx, my, mz) of the body's centre
 LOAD_KINDS = {"force_x": 0, "force_y": 1, "force_z": 2, "moment_x": 3, "moment_y": 4,
@@ -46,27 +74,35 @@ class Model:
 
     # -- building -------------------------------------------------------------------------
     def add(self, component):
-        """Add a frame, body, mesh or bearing; returns it. Names must be unique per kind."""
+        """Add a frame, body or element (mesh, bearing...); returns it. Names must be unique
+        per kind, and bodies and elements share one name space."""
         if isinstance(component, Frame):
             table, kind = self.frames, "frame"
         elif isinstance(component, Body):
             if not component.name:
                 raise ModelError("Body.name", "a body needs a name before it is added to a model")
             table, kind = self.bodies, "body"
-        elif isinstance(component, Mesh):
-            table, kind = self.meshes, "mesh"
-        elif isinstance(component, Bearing):
-            table, kind = self.bearings, "bearing"
+        elif isinstance(component, tuple(ELEMENT_KINDS)):
+            table, kind = self.elements_of(type(component)), type(component).__name__.lower()
         else:
             raise TypeError(f"cannot add {type(component).__name__} to a Model")
         if component.name in table:
             raise ModelError(component.name, f"a {kind} of this name is already in the model")
-        if kind in ("mesh", "bearing") and component.name in self.bodies:
+        if kind != "frame" and kind != "body" and component.name in self.bodies:
             raise ModelError(component.name, "name already used by a body")
-        if kind == "body" and (component.name in self.meshes or component.name in self.bearings):
+        if kind == "body" and any(component.name in self.elements_of(c) for c in ELEMENT_KINDS):
             raise ModelError(component.name, "name already used by a mesh or bearing")
         table[component.name] = component
         return component
+
+    def elements_of(self, cls) -> dict:
+        """The model's table of an element kind (``self.meshes``, ``self.bearings``...)."""
+        return self.__dict__.setdefault(cls.TABLE, {})
+
+    def elements(self):
+        """Every element (meshes, then bearings...), in assembly order."""
+        for cls in ELEMENT_KINDS:
+            yield from self.elements_of(cls).values()
 
     def merge(self, other: Model, prefix: str, ground: str | None = None) -> Model:
         """Copy ``other``'s components into this model, names prefixed by ``prefix + '.'``.
@@ -83,9 +119,12 @@ class Model:
                 nf = copy.copy(fr)
                 nf.name = p(fr.name)
                 self.add(nf)
+        def stage(c):  # what a stage model calls its own is the prefix's
+            return p(c.stage) if c.stage else prefix
+
         for b in other.bodies.values():
             nb = copy.copy(b)
-            nb.name = p(b.name)
+            nb.name, nb.stage = p(b.name), stage(b)
             nb.frame = b.frame if b.frame == GROUND else p(b.frame)
             nb.coordinate_names = dict(b.coordinate_names)
             if b.pinned_to is not None:
@@ -94,22 +133,35 @@ class Model:
         for m in other.meshes.values():
             nm = copy.copy(m)
             nm.name, nm.gear_a, nm.gear_b = p(m.name), p(m.gear_a), p(m.gear_b)
+            nm.stage, nm.planet = stage(m), p(m.planet) if m.planet else m.planet
             self.meshes[self._free(nm.name)] = nm
         for br in other.bearings.values():
             nb = copy.copy(br)
             nb.name, nb.a = p(br.name), p(br.a)
+            nb.stage, nb.planet = stage(br), p(br.planet) if br.planet else br.planet
             nb.b = p(br.b) if br.b is not None else ground
             if br.axes_frame is not None and br.axes_frame != GROUND:
                 nb.axes_frame = p(br.axes_frame)
             nb.stiffness, nb.damping = dict(br.stiffness), dict(br.damping)
             nb.clearance = dict(br.clearance)
             self.bearings[self._free(nb.name)] = nb
+        for cls in ELEMENT_KINDS:
+            if cls in (Mesh, Bearing):
+                continue
+            for e in other.elements_of(cls).values():  # a registered kind: prefix its names
+                ne = copy.copy(e)
+                for f in cls.SCHEMA.fields:
+                    if f.type == "name" and getattr(e, f.key, None):
+                        setattr(ne, f.key, p(getattr(e, f.key)))
+                if hasattr(ne, "stage"):
+                    ne.stage = stage(e)
+                self.elements_of(cls)[self._free(ne.name)] = ne
         for g, members in other.groups.items():
             self.groups[p(g)] = [p(m) for m in members]
         return self
 
     def _free(self, name: str) -> str:
-        if name in self.bodies or name in self.meshes or name in self.bearings:
+        if name in self.bodies or any(name in self.elements_of(c) for c in ELEMENT_KINDS):
             raise ModelError(name, "name already used in the model")
         return name
 
@@ -157,7 +209,6 @@ class Model:
                     raise ModelError(f"{b.name}.pinned_to", f"= {b.pinned_to!r}: must name "
                                      f"another body in frame {b.frame!r} that is not itself "
                                      "pinned")
-        from .components import Gear
         for m in self.meshes.values():
             for side in ("gear_a", "gear_b"):
                 ref = getattr(m, side)
@@ -181,11 +232,18 @@ class Model:
                 raise ModelError(f"{br.name}.b", f"= {br.b!r}: no such body")
             if br.axes_frame is not None and br.axes_frame not in self.frames:
                 raise ModelError(f"{br.name}.axes_frame", f"= {br.axes_frame!r}: no such frame")
+        for cls in ELEMENT_KINDS:
+            if cls in (Mesh, Bearing):
+                continue
+            for e in self.elements_of(cls).values():  # a registered kind: its body names
+                for f in cls.SCHEMA.fields:
+                    ref = getattr(e, f.key, None)
+                    if f.type == "name" and f.key != "name" and ref and ref not in self.bodies:
+                        raise ModelError(f"{e.name}.{f.key}", f"= {ref!r}: no such body")
         return self
 
     def set_dofs(self, level: str, bodies=None) -> Model:
         """Set the DOF level of all (or the named) bodies; returns ``self``."""
-        from .components import DOF_LEVELS
         from .validate import choice
         choice("dofs", level, DOF_LEVELS)
         for name in bodies if bodies is not None else list(self.bodies):

@@ -21,7 +21,7 @@ from typing import Any
 from ..errors import ModelError
 from . import validate as v
 
-__all__ = ["REQUIRED", "Field", "Table", "reference_markdown"]
+__all__ = ["NAME", "REQUIRED", "Field", "Table", "reference_markdown"]
 
 
 class _Required:
@@ -35,7 +35,10 @@ REQUIRED: Any = _Required()
 #: field types and how the reference page names them
 TYPES = {"number": "number", "integer": "integer", "boolean": "true/false",
          "string": "string", "name": "name", "choice": "one of", "vector": "array of numbers",
-         "directions": "table by direction", "names": "table of names", "angle": "number"}
+         "directions": "table by direction", "names": "table of names", "angle": "number",
+         "table": "table", "support": "number or support table",
+         "per_mesh": "number or {sun_planet, ring_planet}",
+         "alternation": "true/false or table", "path": "path", "any": "value"}
 DIRECTIONS = ("x", "y", "z", "rx", "ry", "theta")
 
 
@@ -76,6 +79,21 @@ class Field:
     @property
     def required(self) -> bool:
         return self.default is REQUIRED
+
+    @property
+    def file_key(self) -> str:
+        """The key in the file (``<key>_deg`` for a field given in degrees)."""
+        return f"{self.key}_deg" if self.degrees else self.key
+
+    @property
+    def hint(self) -> str:
+        """What to give, in a few words (shown for a missing key): the unit, or the type."""
+        if self.degrees:
+            return "list of deg" if self.type == "vector" else "deg"
+        if self.type == "choice":
+            c = list(map(str, self.choices))
+            return c[0] if len(c) == 1 else ", ".join(c[:-1]) + " or " + c[-1]
+        return self.unit or TYPES[self.type]
 
     def range_text(self) -> str:
         """The allowed range in words, e.g. ``> 0 kg`` or ``in [1, 10]``."""
@@ -142,6 +160,14 @@ class Field:
                 out[k] = v.number(f"{path}.{k}", x, self.unit)
                 self._in_range(f"{path}.{k}", out[k])
             return out
+        if t in ("table", "support", "per_mesh", "alternation", "any", "path"):
+            ok = {"table": (dict,), "support": (dict, int, float), "per_mesh": (dict, int, float),
+                  "alternation": (dict, bool), "any": (object,), "path": (str,)}[t]
+            if not isinstance(value, ok) or (t in ("support", "per_mesh") and
+                                             isinstance(value, bool)):
+                raise ModelError(path, f"expected a {TYPES[t]}, got {type(value).__name__} "
+                                       f"{value!r}")
+            return value
         if t == "names":
             if not isinstance(value, dict):
                 raise ModelError(path, f"expected a table of names, got {value!r}")
@@ -173,6 +199,17 @@ def _dotted_name(path: str, value) -> str:
         raise ModelError(path, f"= {value!r}: must be non-empty parts without surrounding "
                                "spaces, separated by dots")
     return value
+
+
+#: the ``name`` of every component table
+NAME = Field("name", "name", default=REQUIRED, doc="unique name; dots separate the prefixes "
+             "a drivetrain adds (`stage1.sun`)")
+#: where an element belongs in its gearbox (data the builders set; kept by gm.dumps)
+STRUCTURE = (
+    Field("stage", "string", default="", doc="stage it belongs to (a drivetrain's `stage1`)"),
+    Field("role", "string", default="", doc="its role in the stage (`carrier`, `sun`, "
+          "`planet`, `sun_planet`, `planet_bearing`...)"),
+)
 
 
 @dataclass(frozen=True)
@@ -287,7 +324,8 @@ def reference_markdown(sections: list[tuple[str, str, list[Table]]]) -> str:
     """The file-format reference: for each ``(title, text, tables)`` section a table per
     :class:`Table` with every field's key, type, unit, range, default and description."""
     lines = ["# File formats", "",
-             "Generated from `gearmodal/model/schema.py` by `python -m gearmodal.docs`; do not "
+             "Generated from the schema (`gearmodal/model/schema.py`) by `python -m "
+             "gearmodal.model.reference`; do not "
              "edit by hand (a test checks that it is current).", ""]
     for title, text, tables in sections:
         lines += [f"## {title}", "", text, ""]

@@ -16,67 +16,9 @@ TOML paths.
 
 Schema
 ------
-``[model]`` (all types)
-    ``type`` (required): ``"drivetrain"``, ``"gear_pair"``, ``"planetary_stage"``,
-    ``"parallel_stage"`` or ``"lin_parker_stage"``. ``name`` (default: the file name without
-    extension, or the type), ``rated_speed_rpm``, ``speed_range_rpm = [lo, hi]``.
-
-Gear tables (``sun``, ``planet``, ``ring``, ``gear``, ``pinion``, ``wheel``)
-    ``teeth``, ``module`` (m), ``pressure_angle_deg`` (normal), ``helix_angle_deg`` (signed,
-    default 0), ``face_width`` (m, optional), ``mass`` (kg), ``inertia`` (polar, kg m^2),
-    ``inertia_diametral`` (kg m^2, optional). The ring is internal by definition.
-
-Rigid-body tables (``rotor``, ``generator``, ``housing``, a stage's ``carrier``)
-    ``mass`` (kg), ``inertia`` (kg m^2), ``inertia_diametral`` (optional) and, except for the
-    carrier, ``dofs`` (default ``"torsional"``, for the housing ``"planar"``).
-
-Supports (``planet_bearing``, ``carrier_bearing``, ``sun_support``, ``ring_support``,
-``gear_bearing``, ``pinion_bearing``, gear_pair ``bearing``, ``shaft_bending``, ``suspension``)
-    A number (translational stiffness in N/m on x, y, and z at ``full``), or a table with
-    ``stiffness``, ``damping`` and ``clearance`` tables keyed by direction ``x, y, z`` (N/m,
-    N s/m, m) and ``rx, ry, theta`` (N m/rad, N m s/rad, rad), as :class:`Bearing`, plus
-    optionally ``clearance_shape`` (``"axes"``, default: a dead band per direction;
-    ``"polygon"``: ``facets`` facets around a round clearance; ``"round"``: exactly round,
-    scipy only), ``facets`` (default 16) and ``ramps`` (default 4). A planet bearing's x/y
-    are radial/tangential.
-
-``type = "drivetrain"`` (:func:`~gearmodal.model.builders.drivetrain`)
-    ``[rotor]``; ``[main_shaft]`` with ``stiffness`` (N m/rad) and ``damping``;
-    ``[shaft_bending]`` (optional support of the first stage's input, i.e. the main shaft end
-    through the main bearing); ``[[stages]]`` (input first), each a planetary or parallel stage
-    table (below) plus ``type = "planetary" | "parallel"``, an optional ``name`` (default
-    ``stage<k>``, the DOF name prefix) and, from the second stage on, ``coupling_stiffness``
-    (N m/rad, torsional coupling to the previous stage's output, default 1e9);
-    ``[generator]`` with ``[hss_shaft]`` (``stiffness``, ``damping``); ``[housing]`` with
-    ``[suspension]``.
-
-Planetary stage (``[planetary_stage]`` or a ``[[stages]]`` entry)
-    ``[<stage>.carrier]``, ``[<stage>.sun]``, ``[<stage>.planet]``, ``[<stage>.ring]``;
-    ``mesh_stiffness`` (N/m, a number or ``{sun_planet = .., ring_planet = ..}``), ``backlash``
-    (m), ``mesh_damping`` (N s/m), ``n_planets`` (default 3), ``planet_angles_deg`` (default equally
-    spaced), ``dofs`` (default ``"planar"``), and the supports ``planet_bearing``,
-    ``carrier_bearing``, ``sun_support``, ``ring_support``. ``mesh_alternation`` (every stage
-    and the gear pair; default false): true, or a table of ``contact_ratio`` (a number or
-    ``{sun_planet = .., ring_planet = ..}``; default from the gears), ``stiffness_ratio``
-    (default 1.75) and ``phase``, makes the mesh stiffness alternate between single and double
-    tooth-pair contact at the mesh frequency around ``mesh_stiffness`` as its mean
-    (:mod:`gearmodal.model.mesh_stiffness`).
-
-Parallel stage (``[parallel_stage]`` or a ``[[stages]]`` entry)
-    ``[<stage>.gear]`` (the large input wheel), ``[<stage>.pinion]``; ``mesh_stiffness``,
-    ``backlash``, ``mesh_damping``, ``dofs`` (default ``"planar"``), ``position = [x, y]`` (m),
-    ``angle_deg`` (direction from gear to pinion), ``gear_bearing``, ``pinion_bearing``.
-
-``[gear_pair]``
-    ``[gear_pair.pinion]``, ``[gear_pair.wheel]``, ``mesh_stiffness``, ``backlash`` (required),
-    ``mesh_damping``, ``dofs`` (default ``"torsional"``), ``bearing`` (required unless torsional).
-
-``[lin_parker_stage]`` (:func:`~gearmodal.model.builders.lin_parker_stage`)
-    ``n_planets``, ``pressure_angle_deg`` (a number or ``{sun_planet, ring_planet}``),
-    ``planet_angles_deg``, ``backlash``, ``mesh_damping`` and the tables ``mass``,
-    ``inertia_over_r2`` (kg), ``bearing`` (keys ``carrier, ring, sun, planet``; N/m),
-    ``torsional`` (``carrier, ring, sun``; N/m on ``u = r theta``), ``mesh``
-    (``sun_planet, ring_planet``; N/m).
+Every table and key, with its type, unit, allowed range and default, is listed in
+``docs/file-format.md``, generated from :mod:`gearmodal.model.file_schema` (the builder types)
+and the components' ``SCHEMA`` (``type = "components"``, what :func:`gearmodal.dumps` writes).
 
 Example
 -------
@@ -197,6 +139,7 @@ from pathlib import Path
 
 from ..errors import ModelError
 from . import builders
+from . import file_schema as fs
 from . import validate as v
 from .components import Gear, RigidBody
 from .dump import read_components
@@ -204,64 +147,22 @@ from .model import Model
 
 __all__ = ["MODEL_TYPES", "load", "loads"]
 
-MODEL_TYPES = ("drivetrain", "gear_pair", "planetary_stage", "parallel_stage",
-               "lin_parker_stage", "components")
-STAGE_TYPES = ("planetary", "parallel")
+MODEL_TYPES, STAGE_TYPES = fs.MODEL_TYPES, fs.STAGE_TYPES
 
-# Keys of each table: key -> (required, what it is). The hint is shown for missing keys.
-_MODEL_KEYS = {"type": (True, "one of " + ", ".join(MODEL_TYPES)), "name": (False, "string"),
-               "rated_speed_rpm": (False, "rpm"),
-               "speed_range_rpm": (False, "[low, high] in rpm")}
-_GEAR_KEYS = {"teeth": (True, "integer"), "module": (True, "m"),
-              "pressure_angle_deg": (True, "deg"), "helix_angle_deg": (False, "deg"),
-              "face_width": (False, "m"), "mass": (True, "kg"), "inertia": (True, "kg m^2"),
-              "inertia_diametral": (False, "kg m^2")}
-_BODY_KEYS = {"mass": (True, "kg"), "inertia": (True, "kg m^2"),
-              "inertia_diametral": (False, "kg m^2"),
-              "dofs": (False, "torsional, planar or full")}
-_CARRIER_KEYS = {k: _BODY_KEYS[k] for k in ("mass", "inertia", "inertia_diametral")}
-_SHAFT_KEYS = {"stiffness": (True, "N m/rad"), "damping": (False, "N m s/rad")}
-_SUPPORT_KEYS = {"stiffness": (True, "table keyed by direction"),
-                 "damping": (False, "table keyed by direction"),
-                 "clearance": (False, "table keyed by direction"),
-                 "clearance_shape": (False, "axes, polygon or round"),
-                 "facets": (False, "integer >= 3"), "ramps": (False, "integer 1..12")}
-_STAGE_COMMON = {"type": (False, "planetary or parallel"), "name": (False, "string"),
-                 "coupling_stiffness": (False, "N m/rad"),
-                 "dofs": (False, "torsional, planar or full"),
-                 "mesh_stiffness": (True, "N/m"), "backlash": (False, "m"),
-                 "mesh_damping": (False, "N s/m"),
-                 "mesh_alternation": (False, "true/false or a table of contact_ratio, "
-                                             "stiffness_ratio, phase")}
-_PLANETARY_KEYS = {**_STAGE_COMMON, "n_planets": (False, "integer"),
-                   "planet_angles_deg": (False, "list of deg"), "carrier": (True, "table"),
-                   "sun": (True, "table"), "planet": (True, "table"), "ring": (True, "table"),
-                   "planet_bearing": (False, "support"), "carrier_bearing": (False, "support"),
-                   "sun_support": (False, "support"), "ring_support": (False, "support")}
-_PARALLEL_KEYS = {**_STAGE_COMMON, "position": (False, "[x, y] in m"),
-                  "angle_deg": (False, "deg"), "gear": (True, "table"),
-                  "pinion": (True, "table"), "gear_bearing": (False, "support"),
-                  "pinion_bearing": (False, "support")}
-_GEAR_PAIR_KEYS = {"dofs": (False, "torsional, planar or full"),
-                   "mesh_stiffness": (True, "N/m"), "backlash": (True, "m"),
-                   "mesh_damping": (False, "N s/m"), "bearing": (False, "support"),
-                   "pinion": (True, "table"), "wheel": (True, "table"),
-                   "mesh_alternation": _STAGE_COMMON["mesh_alternation"]}
-_LIN_PARKER_KEYS = {"n_planets": (True, "integer"), "pressure_angle_deg": (True, "deg"),
-                    "planet_angles_deg": (False, "list of deg"), "backlash": (False, "m"),
-                    "mesh_damping": (False, "N s/m"), "mass": (True, "table, kg"),
-                    "inertia_over_r2": (True, "table, kg"), "bearing": (True, "table, N/m"),
-                    "torsional": (True, "table, N/m"), "mesh": (True, "table, N/m")}
-_MESH_KEYS = {"sun_planet": (True, "N/m"), "ring_planet": (True, "N/m")}
-_SECTIONS = {
-    "drivetrain": {"model": True, "rotor": True, "main_shaft": True, "shaft_bending": False,
-                   "stages": True, "generator": False, "hss_shaft": False, "housing": False,
-                   "suspension": False},
-    "gear_pair": {"model": True, "gear_pair": True},
-    "planetary_stage": {"model": True, "planetary_stage": True},
-    "parallel_stage": {"model": True, "parallel_stage": True},
-    "lin_parker_stage": {"model": True, "lin_parker_stage": True},
-}
+# Keys of each table: key -> (required, what it is), from the schema (file_schema.py). The
+# hint is shown for missing keys.
+_MODEL_KEYS = fs.keys(fs.MODEL)
+_GEAR_KEYS = fs.keys(fs.GEAR)
+_BODY_KEYS = fs.keys(fs.BODY)
+_CARRIER_KEYS = fs.keys(fs.CARRIER)
+_SHAFT_KEYS = fs.keys(fs.SHAFT)
+_SUPPORT_KEYS = fs.keys(fs.SUPPORT)
+_PLANETARY_KEYS = fs.keys(fs.PLANETARY)
+_PARALLEL_KEYS = fs.keys(fs.PARALLEL)
+_GEAR_PAIR_KEYS = fs.keys(fs.GEAR_PAIR)
+_LIN_PARKER_KEYS = fs.keys(fs.LIN_PARKER)
+_MESH_KEYS = fs.keys(fs.PER_MESH)
+_SECTIONS = fs.SECTIONS
 
 
 # -- public API -----------------------------------------------------------------------------

@@ -244,10 +244,10 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                              "bodies 'rotor' and 'generator' (see studies/models/600kw.toml)")
     # the first stage's carrier takes the shaft-end force; a torsional one has no
     # translation, so the force is not modelled (the turbine's loads table still reports it)
-    carrier = next((b for b in gearbox.bodies if b.endswith(".carrier")), None)
+    carrier = next((b.name for b in gearbox.bodies.values() if b.role == "carrier"), None)
     if carrier is None:
-        raise ModelError("gearbox", "has no planetary carrier 'stageN.carrier' to carry the "
-                         "shaft-end force")
+        raise ModelError("gearbox", "has no planetary carrier (a body of role 'carrier', as "
+                         "gm.planetary_stage makes) to carry the shaft-end force")
     carrier_x = f"{carrier}.force_x"
     bending = carrier_x in asm0.load_names
     n = asm0.n

@@ -1,0 +1,152 @@
+"""The tables of the builder-level model files (``type = "drivetrain"``, ``"gear_pair"``...), as
+:class:`~gearmodal.model.schema.Table` s: the key checks of :mod:`gearmodal.model.toml_io` and the
+file-format reference page (``docs/file-format.md``) both come from here. The component tables
+(``type = "components"``, what :func:`gearmodal.dumps` writes) are each component's ``SCHEMA``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from .bearing import Bearing
+from .components import DOF_LEVELS
+from .schema import REQUIRED, Field, Table
+
+MODEL_TYPES = ("drivetrain", "gear_pair", "planetary_stage", "parallel_stage",
+               "lin_parker_stage", "components")
+STAGE_TYPES = ("planetary", "parallel")
+
+
+def _required(f: Field) -> Field:
+    return dataclasses.replace(f, default=REQUIRED)
+
+
+_POS = {"low": 0.0, "low_open": True}
+_NONNEG = {"low": 0.0}
+_DOFS = Field("dofs", "choice", choices=DOF_LEVELS, doc="DOF level of the bodies")
+_MASS = Field("mass", "number", "kg", **_POS, default=REQUIRED, doc="mass")
+_INERTIA = Field("inertia", "number", "kg m^2", **_POS, default=REQUIRED,
+                 doc="polar moment of inertia")
+_DIAMETRAL = Field("inertia_diametral", "number", "kg m^2", **_POS,
+                   doc="moment of inertia about a diameter (default inertia / 2)")
+_ALTERNATION = Field("mesh_alternation", "alternation", default=False,
+                     doc="true, or a table of contact_ratio, stiffness_ratio, phase: the mesh "
+                         "stiffness alternates between single and double tooth-pair contact")
+
+MODEL = Table("model", (
+    Field("type", "choice", choices=MODEL_TYPES, default=REQUIRED,
+          doc="which builder makes the model (`components`: see below)"),
+    Field("name", "string", doc="model name (default: the file name)"),
+    Field("rated_speed_rpm", "number", "rpm", **_NONNEG, doc="rated speed of the input"),
+    Field("speed_range_rpm", "vector", "rpm", lengths=(2,), **_NONNEG,
+          doc="[low, high] operating range of the input")),
+    "Every model file's `[model]` table.")
+GEAR = Table("gear (sun, planet, ring, gear, pinion, wheel)", (
+    Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth"),
+    Field("module", "number", "m", **_POS, high=1.0, default=REQUIRED,
+          doc="normal module (10 mm = 0.010)"),
+    Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 4, high_open=True,
+          degrees=True, default=REQUIRED, doc="normal pressure angle"),
+    Field("helix_angle", "angle", "rad", low=-math.pi / 4, high=math.pi / 4, high_open=True,
+          degrees=True, default=0.0, doc="helix angle, signed (positive = right hand)"),
+    Field("face_width", "number", "m", **_POS, doc="face width"),
+    _MASS, _INERTIA, _DIAMETRAL),
+    "A gear wheel; the ring is internal by definition.")
+BODY = Table("body (rotor, generator, housing)", (
+    _MASS, _INERTIA, _DIAMETRAL,
+    dataclasses.replace(_DOFS, doc="DOF level (default torsional; the housing: planar)")),
+    "A rigid body that is not a gear.")
+CARRIER = Table("carrier", (_MASS, _INERTIA, _DIAMETRAL), "A planetary stage's carrier.")
+SHAFT = Table("shaft (main_shaft, hss_shaft)", (
+    Field("stiffness", "number", "N m/rad", **_NONNEG, default=REQUIRED,
+          doc="torsional stiffness"),
+    Field("damping", "number", "N m s/rad", **_NONNEG, default=0.0, doc="torsional damping")),
+    "A torsional shaft.")
+_B = Bearing.SCHEMA.by_key()
+SUPPORT = Table("support (a bearing given as a table)", (
+    _required(_B["stiffness"]), _B["damping"], _B["clearance"], _B["clearance_shape"],
+    _B["facets"], _B["ramps"]),
+    "A support given as a table; a number instead is a translational stiffness in N/m on x "
+    "and y (and z at `full`). A planet bearing's x/y are radial/tangential.")
+_STAGE_COMMON = (
+    Field("type", "choice", choices=STAGE_TYPES, doc="stage type (in `[[stages]]`: required)"),
+    Field("name", "name", doc="DOF name prefix in a drivetrain (default `stage<k>`)"),
+    Field("coupling_stiffness", "number", "N m/rad", **_NONNEG, default=1e9,
+          doc="torsional coupling to the previous stage's output (not on the first stage)"),
+    dataclasses.replace(_DOFS, default="planar"),
+    Field("mesh_stiffness", "per_mesh", "N/m", **_NONNEG, default=REQUIRED,
+          doc="mesh stiffness on the line of action"),
+    Field("backlash", "number", "m", **_NONNEG, default=0.0, doc="backlash on the line of action"),
+    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping"),
+    _ALTERNATION)
+PLANETARY = Table("planetary stage (`[planetary_stage]` or a `[[stages]]` entry)", (
+    *_STAGE_COMMON,
+    Field("n_planets", "integer", low=1, default=3, doc="number of planets"),
+    Field("planet_angles", "vector", "rad", degrees=True,
+          doc="planet positions (default equally spaced)"),
+    Field("carrier", "table", default=REQUIRED, doc="the carrier (carrier table)"),
+    Field("sun", "table", default=REQUIRED, doc="gear table"),
+    Field("planet", "table", default=REQUIRED, doc="gear table"),
+    Field("ring", "table", default=REQUIRED, doc="gear table"),
+    Field("planet_bearing", "support", doc="each planet on its carrier pin"),
+    Field("carrier_bearing", "support", doc="carrier to the housing"),
+    Field("sun_support", "support", doc="sun to the housing"),
+    Field("ring_support", "support", doc="ring to the housing")),
+    "A planetary stage, carrier input.")
+PARALLEL = Table("parallel stage (`[parallel_stage]` or a `[[stages]]` entry)", (
+    *_STAGE_COMMON,
+    Field("position", "vector", "m", lengths=(2,), default=(0.0, 0.0),
+          doc="[x, y] centre of the gear"),
+    Field("angle", "angle", "rad", degrees=True, default=0.0,
+          doc="direction from the gear to the pinion"),
+    Field("gear", "table", default=REQUIRED, doc="the large input wheel (gear table)"),
+    Field("pinion", "table", default=REQUIRED, doc="gear table"),
+    Field("gear_bearing", "support", doc="gear to the housing"),
+    Field("pinion_bearing", "support", doc="pinion to the housing")),
+    "A parallel (speed-increasing) stage.")
+GEAR_PAIR = Table("gear_pair", (
+    dataclasses.replace(_DOFS, default="torsional"),
+    Field("mesh_stiffness", "number", "N/m", **_NONNEG, default=REQUIRED,
+          doc="mesh stiffness on the line of action"),
+    Field("backlash", "number", "m", **_NONNEG, default=REQUIRED, doc="backlash"),
+    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping"),
+    Field("bearing", "support", doc="both wheels to the ground (required unless torsional)"),
+    Field("pinion", "table", default=REQUIRED, doc="gear table"),
+    Field("wheel", "table", default=REQUIRED, doc="gear table"),
+    _ALTERNATION),
+    "Two external gears on bearings.")
+LIN_PARKER = Table("lin_parker_stage", (
+    Field("n_planets", "integer", low=1, default=REQUIRED, doc="number of planets"),
+    Field("pressure_angle", "angle", "rad", degrees=True, default=REQUIRED,
+          doc="a number or {sun_planet, ring_planet}"),
+    Field("planet_angles", "vector", "rad", degrees=True,
+          doc="planet positions (default equally spaced)"),
+    Field("backlash", "number", "m", **_NONNEG, default=0.0, doc="backlash"),
+    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping"),
+    Field("mass", "table", "kg", default=REQUIRED, doc="carrier, ring, sun, planet"),
+    Field("inertia_over_r2", "table", "kg", default=REQUIRED, doc="carrier, ring, sun, planet"),
+    Field("bearing", "table", "N/m", default=REQUIRED, doc="carrier, ring, sun, planet"),
+    Field("torsional", "table", "N/m", default=REQUIRED,
+          doc="carrier, ring, sun (on u = r theta)"),
+    Field("mesh", "table", "N/m", default=REQUIRED, doc="sun_planet, ring_planet")),
+    "Lin & Parker's (1999) planar stage in their notation.")
+PER_MESH = Table("per mesh (sun_planet, ring_planet)", (
+    Field("sun_planet", "number", "N/m", default=REQUIRED, doc="sun-planet meshes"),
+    Field("ring_planet", "number", "N/m", default=REQUIRED, doc="ring-planet meshes")),
+    "A value per mesh kind.")
+#: the sections of each model type: section -> required
+SECTIONS = {
+    "drivetrain": {"model": True, "rotor": True, "main_shaft": True, "shaft_bending": False,
+                   "stages": True, "generator": False, "hss_shaft": False, "housing": False,
+                   "suspension": False},
+    "gear_pair": {"model": True, "gear_pair": True},
+    "planetary_stage": {"model": True, "planetary_stage": True},
+    "parallel_stage": {"model": True, "parallel_stage": True},
+    "lin_parker_stage": {"model": True, "lin_parker_stage": True},
+}
+
+
+def keys(table: Table) -> dict:
+    """``{file key: (required, hint)}`` of a table (the loader's key checks)."""
+    return {f.file_key: (f.required, f.hint) for f in table.fields}

@@ -1,0 +1,161 @@
+"""The gear mesh element: two compression-only flanks with backlash (DESIGN 2.2)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import ModelError
+from ..kernels.mesh import mesh_gap_jacobian
+from . import validate as v
+from .components import Gear, check_structure
+from .mesh_stiffness import variation_of
+from .schema import NAME, REQUIRED, STRUCTURE, Field, Table
+
+__all__ = ["Mesh"]
+
+
+@dataclass(eq=False)
+class Mesh:
+    """A gear mesh with two compression-only flanks and backlash (DESIGN 2.2).
+
+    The front flank carries ``stiffness * d_f + damping * d_f'`` while ``d_f > 0``; the back
+    flank ``stiffness * (d_b - backlash) + damping * d_b'`` while ``d_b > backlash``. ``q = 0`` is
+    front flanks touching with zero force. ``side`` (+1 or -1) picks which line of action is the
+    front flank: with ``side = +1`` a positive rotation of ``gear_a`` closes the front flank.
+    For an internal pair ``gear_a`` is the ring.
+
+    ``pressure_angle`` (transverse, rad), ``base_radii`` (m, m), ``helix_angle`` (base helix,
+    rad) and ``internal`` override the values derived from the gears (used by
+    :func:`gearmodal.lin_parker_stage`, whose bodies carry no tooth data).
+
+    Mesh stiffness (a fidelity rung, :mod:`gearmodal.model.mesh_stiffness`): ``alternation =
+    False`` (default) keeps ``stiffness`` constant. ``alternation = True`` alternates it at the
+    mesh frequency between single and double tooth-pair contact, a rectangular wave (M1) whose
+    mean is ``stiffness`` (ISO 6336's mean mesh stiffness c_gamma), with the double-pair
+    stiffness ``stiffness_ratio`` times the single-pair one (default 1.75, which makes the mean
+    ISO 6336-1's c_gamma = c' (0.75 eps + 0.25) for any contact ratio). ``contact_ratio`` is
+    the transverse contact ratio eps in (1, 2): the fraction eps - 1 of each mesh period has two
+    pairs in contact; by default it is computed from the gears (standard addendum of one
+    module, no profile shift). ``phase`` is the fraction of a mesh period elapsed at input
+    azimuth 0 (0 = the start of a double-pair zone). The wave runs on the nominal rotation of
+    the gears, so it switches at known times: the exact method switches at them exactly.
+    """
+
+    name: str
+    gear_a: str
+    gear_b: str
+    stiffness: float
+    backlash: float = 0.0
+    damping: float = 0.0
+    side: int = 1
+    pressure_angle: float | None = None
+    base_radii: tuple | None = None
+    helix_angle: float | None = None
+    internal: bool | None = None
+    alternation: bool = False
+    contact_ratio: float | None = None
+    stiffness_ratio: float = 1.75
+    phase: float = 0.0
+    stage: str = ""
+    role: str = ""
+    planet: str | None = None
+
+    TABLE: ClassVar[str] = "meshes"
+    SCHEMA: ClassVar[Table]
+
+    def __post_init__(self):
+        f = self.name
+        v.name("Mesh.name", self.name)
+        check_structure(self)
+        if not isinstance(self.alternation, bool):
+            raise ModelError(f"{f}.alternation", f"expected true/false, got "
+                             f"{self.alternation!r}")
+        if self.contact_ratio is not None:
+            self.contact_ratio = v.number(f"{f}.contact_ratio", self.contact_ratio)
+            if not 1.0 < self.contact_ratio < 2.0:
+                raise ModelError(f"{f}.contact_ratio", f"= {self.contact_ratio!r}: must lie in "
+                                 "(1, 2) (single/double tooth-pair alternation)")
+        self.stiffness_ratio = v.number(f"{f}.stiffness_ratio", self.stiffness_ratio)
+        if not 1.0 <= self.stiffness_ratio <= 10.0:
+            raise ModelError(f"{f}.stiffness_ratio", f"= {self.stiffness_ratio!r}: must lie in "
+                             "[1, 10] (double-pair over single-pair stiffness)")
+        self.phase = v.number(f"{f}.phase", self.phase)
+        self.stiffness = v.nonnegative(f"{f}.stiffness", self.stiffness, "N/m")
+        self.backlash = v.nonnegative(f"{f}.backlash", self.backlash, "m")
+        self.damping = v.nonnegative(f"{f}.damping", self.damping, "N s/m")
+        if self.side not in (1, -1):
+            raise ModelError(f"{f}.side", f"= {self.side!r}: must be +1 or -1")
+        if self.pressure_angle is not None:
+            self.pressure_angle = v.angle(f"{f}.pressure_angle", self.pressure_angle,
+                                          low=1e-6, high=math.pi / 2)
+
+    # -- its contribution to the assembly (DESIGN 2.2) --------------------------------------
+    def contribute(self, ctx) -> None:
+        """Add the two flanks to ``ctx`` (:class:`gearmodal.assembly.Contributions`): each a
+        unilateral contact on its line of action, the back flank mirrored and offset by the
+        backlash; an alternating stiffness (M1) as the flanks' variation."""
+        model = ctx.model
+        a, b = model.bodies[self.gear_a], model.bodies[self.gear_b]
+        if self.internal is not None:
+            internal = 1.0 if self.internal else 0.0
+        else:
+            internal = 1.0 if isinstance(a, Gear) and a.internal else 0.0
+        if self.base_radii is not None:
+            rba, rbb = (float(r) for r in self.base_radii)
+        else:
+            rba, rbb = a.base_radius, b.base_radius
+        if self.pressure_angle is not None:
+            alpha = self.pressure_angle
+        else:
+            g = b if isinstance(b, Gear) else a
+            alpha = g.transverse_pressure_angle
+        if self.helix_angle is not None:
+            beta_b = self.helix_angle
+        else:
+            beta_b = a.base_helix_angle if isinstance(a, Gear) else 0.0
+        ca, cb = ctx.centre(a), ctx.centre(b)
+        if np.hypot(*(cb - ca)[:2]) == 0.0:
+            raise ModelError(self.name, f"gears {a.name!r} and {b.name!r} have the same centre")
+        for flank, side, off in (("front", self.side, 0.0), ("back", -self.side,
+                                                             self.backlash)):
+            J = mesh_gap_jacobian(ca[0], ca[1], cb[0], cb[1], rba, rbb, alpha, beta_b,
+                                  float(side), internal)
+            w = ctx.row([(a, J[:6]), (b, J[6:])])
+            if np.any(w):
+                variation = variation_of(model, self, a, b, bool(internal)) \
+                    if self.alternation else None
+                ctx.contact(w, off, self.stiffness, self.damping, flank == "front", self,
+                            flank, "mesh", columns=[(f"{self.name}.{flank}", 1.0)],
+                            variation=variation)
+
+
+Mesh.SCHEMA = Table("meshes", (
+    NAME,
+    Field("gear_a", "name", default=REQUIRED, doc="first gear (the ring of an internal pair)"),
+    Field("gear_b", "name", default=REQUIRED, doc="second gear"),
+    Field("stiffness", "number", "N/m", low=0.0, default=REQUIRED,
+          doc="mesh stiffness along the line of action (the mean if alternating)"),
+    Field("backlash", "number", "m", low=0.0, default=0.0, doc="backlash on the line of action"),
+    Field("damping", "number", "N s/m", low=0.0, default=0.0, doc="mesh damping"),
+    Field("side", "integer", low=-1, high=1, default=1,
+          doc="+1 or -1: which line of action is the front flank"),
+    Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 2, high_open=True,
+          doc="transverse pressure angle (default: from the gears)"),
+    Field("base_radii", "vector", "m", lengths=(2,), low=0.0,
+          doc="[a, b] base radii (default: from the gears)"),
+    Field("helix_angle", "angle", "rad", doc="base helix angle (default: from the gears)"),
+    Field("internal", "boolean", doc="internal pair (default: gear_a is an internal gear)"),
+    Field("alternation", "boolean", default=False,
+          doc="stiffness alternates between single and double tooth-pair contact"),
+    Field("contact_ratio", "number", low=1.0, high=2.0, low_open=True, high_open=True,
+          doc="transverse contact ratio (default: from the gears)"),
+    Field("stiffness_ratio", "number", low=1.0, high=10.0, default=1.75,
+          doc="double-pair over single-pair stiffness"),
+    Field("phase", "number", default=0.0,
+          doc="fraction of a mesh period elapsed at input azimuth 0"),
+    *STRUCTURE, Field("planet", "name", doc="the planet this mesh belongs to")),
+    "A gear mesh with two compression-only flanks and backlash (`[[meshes]]`).")
