@@ -38,7 +38,7 @@ DOF level) is the scene's choice.
 
 Resume: with ``store=DIR`` every rung's settings, CPU time and summary are written to
 ``DIR/rung<l>.json`` as it finishes (atomically), under the scene's fingerprint (SHA-256 of
-the pickled scene, ``DIR/auto_store.json``). Started again on the same scene and store, the
+the scene's canonical text, ``DIR/auto_store.json``). Started again on the same scene and store, the
 ladder loads the finished rungs and runs only the others; a different scene (or a different
 ``coarsest``) is refused. The store keeps summaries, not time series: when the chosen rung was
 loaded, it is run once more to return its result (the runs are deterministic, so that result
@@ -49,11 +49,9 @@ upgrade changed the integrator, raises naming ``store``).
 from __future__ import annotations
 
 import copy
-import hashlib
 import json
 import math
 import os
-import pickle
 import time
 import uuid
 from dataclasses import dataclass, field
@@ -108,21 +106,26 @@ def _rung_settings(scene, base: dict, f: float) -> dict:
 
 
 def fingerprint(scene) -> str:
-    """SHA-256 of the pickled scene (model, loads, turbine, wind, settings) without what does
-    not change a rung's run (the file path it was loaded from, ``method``, ``tolerance``):
-    what a :func:`choose` store is keyed by. Raises :class:`ModelError` naming ``store`` when
-    the scene does not pickle (e.g. a load given as a lambda)."""
+    """SHA-256 of the scene's inputs as canonical text (:meth:`gearmodal.scene.Scene.identity`:
+    the dumped model and scene, the turbine's data) without what does not change a rung's run
+    (the file it was loaded from, ``method``, ``tolerance``): what a :func:`choose` store is
+    keyed by. Independent of the library version and of the files' comments and layout.
+    Raises :class:`ModelError` naming ``store`` when the scene cannot be written as text
+    (e.g. a load given as a function)."""
     sc = copy.copy(scene)
-    for attr, neutral in (("source", ""), ("method", "exact"), ("tolerance", 0.0)):
+    for attr, neutral in (("source", ""), ("method", "exact"), ("tolerance", 0.05)):
         if hasattr(sc, attr):
             setattr(sc, attr, neutral)
     try:
-        blob = pickle.dumps(sc, protocol=4)
-    except Exception as err:  # pickling raises several types (PicklingError, AttributeError)
+        return sc.identity()
+    except (ModelError, AttributeError, TypeError) as err:
         raise ModelError("store", "the scene cannot be fingerprinted for a resumable store "
                          f"({type(err).__name__}: {err}); give its loads as constants, "
-                         "Series or module-level functions, or run without a store") from None
-    return hashlib.sha256(blob).hexdigest()
+                         "waves or a [load_file], or run without a store") from None
+
+
+#: the layout of a store; a store of another layout (an older gearmodal) is refused
+STORE_FORMAT = "gearmodal.auto/2"
 
 
 class _Store:
@@ -132,8 +135,13 @@ class _Store:
         self.dir = Path(directory)
         self.dir.mkdir(parents=True, exist_ok=True)
         meta = self.dir / "auto_store.json"
+        ident = {"format": STORE_FORMAT, **ident}
         if meta.exists():
             old = json.loads(meta.read_text())
+            if old.get("format") != STORE_FORMAT:
+                raise ModelError("store", f"= {str(directory)!r} was written by an older "
+                                 f"gearmodal (format {old.get('format', 1)!r}, this one reads "
+                                 f"{STORE_FORMAT!r}): use a new store or delete it")
             for key, val in ident.items():
                 if old.get(key) != val:
                     raise ModelError("store", f"= {str(directory)!r} holds the ladder of a "

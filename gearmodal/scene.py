@@ -65,7 +65,7 @@ _TURBINE_KEYS = {"file", "rotor_speed0_rpm", "azimuth0_deg", "connected",
                  "mounting_azimuth_deg", "aero_dt", "aero_hold", "rebase_speed",
                  "rebase_angle"}
 _LOAD_FILE_KEYS = {"path", "format", "t_start", "mapping"}
-_WAVE = {"mean", "amplitude", "frequency_hz", "phase_deg"}
+_WAVE = {"mean", "amplitude", "frequency_hz", "phase_deg", "phase"}
 
 
 @dataclass
@@ -86,6 +86,82 @@ class Scene:
     wind: object = None
     drivetrain: dict = field(default_factory=dict)
     tolerance: float = 0.05
+    #: the ``[load_file]`` table as read (its path absolute), and the turbine file
+    load_file: dict = field(default_factory=dict)
+    turbine_file: str = ""
+
+    def dumps(self, model_path: str = "model.toml") -> str:
+        """The scene as scene-file text whose model is the file ``model_path`` (relative to
+        the scene file; write it with ``gm.dump(scene.model, path)``). Loading the pair gives
+        the same scene: numbers exact, a wave's phase in rad, a load read from a file as its
+        ``[load_file]`` table, the turbine and load files by absolute path.
+
+        Raises :class:`ModelError` naming a load given as a function (not writable)."""
+        from .model.dump import to_toml
+
+        return to_toml(self._document(model_path))
+
+    def identity(self) -> str:
+        """SHA-256 of the scene's inputs as canonical text: the model (``gm.dumps``), this
+        scene (:meth:`dumps`, file paths left out), the turbine's data and the load file's
+        bytes. Independent of the library version, of comments and layout in the files and
+        of where they are; what resumable stores key their runs by."""
+        import dataclasses
+        import hashlib
+        import json
+
+        from .model.dump import dumps as dump_model
+        from .model.dump import to_toml
+
+        parts = [dump_model(self.model), to_toml(self._document("", paths=False))]
+        if self.turbine is not None:
+            parts.append(json.dumps(dataclasses.asdict(self.turbine), sort_keys=True,
+                                    default=lambda o: o.tolist()))
+        if self.load_file:
+            parts.append(hashlib.sha256(Path(self.load_file["path"]).read_bytes()).hexdigest())
+        return hashlib.sha256("\n".join(parts).encode()).hexdigest()
+
+    def _document(self, model_path: str, paths: bool = True) -> dict:
+        import dataclasses
+
+        sc = {"model": model_path, "t_end": self.t_end, "dt": self.dt, "method": self.method}
+        if self.turbine is None:
+            sc["speed_rpm"] = self.speed_rpm
+        if self.method == "auto":
+            sc["tolerance"] = self.tolerance
+        doc: dict = {"scene": sc}
+        from_file = set(self.load_file.get("mapping", {}))
+        loads = {}
+        for name, val in self.loads.items():
+            if name in from_file:
+                continue
+            if isinstance(val, Wave):
+                loads[name] = {"mean": val.mean, "amplitude": val.amplitude,
+                               "frequency_hz": val.frequency_hz, "phase": val.phase}
+            elif isinstance(val, (int, float)) and not isinstance(val, bool):
+                loads[name] = float(val)
+            else:
+                raise ModelError(f"loads.{name}", f"a load given as {type(val).__name__} "
+                                 "cannot be written to a scene file; give constants, waves or "
+                                 "a [load_file]")
+        for key, table in (("loads", loads), ("q0", self.q0), ("v0", self.v0),
+                           ("options", self.options)):
+            if table:
+                doc[key] = {k: (float(x) if isinstance(x, (int, float))
+                                and not isinstance(x, bool) and key != "options" else x)
+                            for k, x in table.items()}
+        if self.load_file:
+            lf = dict(self.load_file)
+            if not paths:
+                lf.pop("path", None)
+            doc["load_file"] = lf
+        if self.turbine is not None:
+            tb = {"file": self.turbine_file} if paths else {}
+            tb.update(self.drivetrain)
+            tb["mounting_azimuth_deg"] = self.turbine.mounting_azimuth_deg
+            doc["turbine"] = tb
+            doc["wind"] = dataclasses.asdict(self.wind)
+        return doc
 
     def simulate(self, progress=None):
         """Run the scene: :func:`gearmodal.simulate` on the model with the scene's loads, or,
@@ -147,7 +223,12 @@ def _wave(field_: str, spec: dict):
     mean = v.number(f"{field_}.mean", spec.get("mean", 0.0), "N or N m")
     amp = v.number(f"{field_}.amplitude", spec.get("amplitude", 0.0), "N or N m")
     f = v.nonnegative(f"{field_}.frequency_hz", spec.get("frequency_hz", 0.0), "Hz")
-    ph = math.radians(v.number(f"{field_}.phase_deg", spec.get("phase_deg", 0.0), "deg"))
+    if "phase" in spec and "phase_deg" in spec:
+        raise ModelError(f"{field_}.phase", "given twice (phase in rad and phase_deg); give one")
+    if "phase" in spec:  # radians, as Scene.dumps writes it (exact)
+        ph = v.number(f"{field_}.phase", spec["phase"], "rad")
+    else:
+        ph = math.radians(v.number(f"{field_}.phase_deg", spec.get("phase_deg", 0.0), "deg"))
     return Wave(mean, amp, f, ph), mean
 
 
@@ -211,9 +292,12 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
                              "tolerance in (0, 10), e.g. 0.05")
     speed = v.nonnegative("scene.speed_rpm", sc.get("speed_rpm", 0.0), "rpm")
     loads, means, balance = {}, {}, None
+    load_file = {}
     if "load_file" in doc:
         for name, ser in _load_file(doc["load_file"], p).items():
             loads[name], means[name] = ser, float(ser.mean())
+        load_file = {**doc["load_file"],
+                     "path": str((p.parent / str(doc["load_file"]["path"])).resolve())}
     for name, spec in doc.get("loads", {}).items():
         f = f"loads.{name}"
         if spec == "balance":
@@ -251,9 +335,12 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
         turbine, wind, drivetrain = _turbine(doc["turbine"], doc.get("wind", {}), p, t_end)
     elif "wind" in doc:
         raise ModelError("wind", "needs a [turbine] table")
+    turbine_file = str((p.parent / str(doc["turbine"]["file"])).resolve()) \
+        if turbine is not None else ""
     return Scene(model=model, t_end=t_end, dt=dt, method=method, speed_rpm=speed, loads=loads,
                  q0=q0, v0=v0, options=options, source=str(p), turbine=turbine, wind=wind,
-                 drivetrain=drivetrain, tolerance=tolerance)
+                 drivetrain=drivetrain, tolerance=tolerance, load_file=load_file,
+                 turbine_file=turbine_file)
 
 
 def _load_file(spec: dict, p: Path) -> dict:

@@ -8,7 +8,7 @@ be any picklable callable ``scene(**case)`` returning a result.
 
 Store layout (``store=DIR``)::
 
-    DIR/sweep.json                 the scene, its files' SHA-256, the cases
+    DIR/sweep.json                 the layout, the scene's identity (canonical text), the cases
     DIR/cases/<case_id>/row.parquet     one row: the case's scalar results
     DIR/cases/<case_id>/<table>.parquet tables the metrics returned (events, forces, ...)
 
@@ -110,30 +110,23 @@ def _callable_name(f) -> str:
     return f"{getattr(f, '__module__', '?')}.{getattr(f, '__qualname__', repr(f))}"
 
 
+#: the layout of a store; a store of another layout (an older gearmodal) is refused
+STORE_FORMAT = "gearmodal.sweep/2"
+
+
 def _scene_identity(scene) -> dict:
-    """What identifies the scene in ``sweep.json``: the file and its model file's SHA-256, or
-    the callable's qualified name."""
+    """What identifies the scene in ``sweep.json``: the file and the SHA-256 of its canonical
+    text (:meth:`gearmodal.scene.Scene.identity`: the dumped model, scene and turbine, so a
+    comment or a moved file does not change it and an edited value does), or the
+    callable's qualified name."""
     if callable(scene):
         return {"callable": _callable_name(scene)}
-    import tomllib
+    from .scene import load_scene
 
     p = Path(scene)
     if not p.is_file():
         raise ModelError("scene", f"= {str(scene)!r}: no such scene file")
-    ident = {"scene": str(p.resolve()), "scene_sha256": hashlib.sha256(p.read_bytes()).hexdigest()}
-    try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (OSError, tomllib.TOMLDecodeError):
-        return ident  # load_scene will name the problem
-    # every file the scene refers to: the model, the turbine, an aeroelastic load file
-    refs = {"model_sha256": ("scene", "model"), "turbine_sha256": ("turbine", "file"),
-            "load_file_sha256": ("load_file", "path")}
-    for key, (table, field) in refs.items():
-        try:
-            ident[key] = hashlib.sha256((p.parent / doc[table][field]).read_bytes()).hexdigest()
-        except (KeyError, TypeError, OSError):
-            pass
-    return ident
+    return {"scene": str(p.resolve()), "scene_sha256": load_scene(p).identity()}
 
 
 def _run_case(scene, case: dict, metrics: Callable, blas_threads: int | None) -> tuple:
@@ -249,9 +242,12 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         old = {}
         if meta_path.exists():
             old = json.loads(meta_path.read_text())
+            if old.get("format") != STORE_FORMAT:
+                raise ModelError("store", f"= {str(store)!r} was written by an older gearmodal "
+                                 f"(format {old.get('format', 1)!r}, this one reads "
+                                 f"{STORE_FORMAT!r}): use a new store or delete it")
             old_id = old.get("identity", {})
-            for key in ("scene_sha256", "model_sha256", "turbine_sha256", "load_file_sha256",
-                        "callable", "metrics"):
+            for key in ("scene_sha256", "callable", "metrics"):
                 if key in old_id and old_id[key] != ident.get(key):
                     what = "metrics" if key == "metrics" else "scene"
                     raise ModelError("store", f"= {str(store)!r} was made with a different "
@@ -259,7 +255,7 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         # every case this store has seen, earlier runs' first (a run on a subset keeps them)
         known = {c["case_id"]: c for c in old.get("cases", [])}
         known.update({i: {"case_id": i, **c} for i, c in zip(ids, cases, strict=True)})
-        meta = {"identity": ident, "cases": list(known.values())}
+        meta = {"format": STORE_FORMAT, "identity": ident, "cases": list(known.values())}
         tmp = meta_path.with_name(f".sweep-{uuid.uuid4().hex[:8]}.json")
         tmp.write_text(json.dumps(meta, indent=1, default=repr))
         os.replace(tmp, meta_path)
