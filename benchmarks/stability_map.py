@@ -69,9 +69,7 @@ BLOWUP = 10.0
 
 # -- cases ----------------------------------------------------------------------------------
 def _pair(mass, k, backlash, damping=0.0):
-    p = gm.Gear(20, 0.004, math.radians(20), mass=mass, inertia=mass * 0.0376**2 / 2)
-    w = gm.Gear(40, 0.004, math.radians(20), mass=4 * mass, inertia=4 * mass * 0.0752**2 / 2)
-    return gm.gear_pair(p, w, mesh_stiffness=k, backlash=backlash, mesh_damping=damping)
+    return gm.examples.disk_pair(mass, k, backlash, damping)  # tests/test_integrate.py's
 
 
 def rattle_case(k, mass, backlash):

@@ -115,9 +115,7 @@ ERROR_DEF = ("error = max over output times and DOFs |q - q_ref| / max over time
 # -- problems -------------------------------------------------------------------------------
 def gear_rattle_model():
     """The test's 20/40 pair, damped mesh, each wheel on a torsional shaft to the ground."""
-    p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
-    w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
-    m = gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4, mesh_damping=2000.0)
+    m = gm.examples.gear_pair(mesh_damping=2000.0)
     m.add(gm.Bearing("input_shaft", "pinion", None, stiffness={"theta": 2e3}))
     m.add(gm.Bearing("output_shaft", "wheel", None, stiffness={"theta": 2e4}))
     return m.check()

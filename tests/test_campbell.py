@@ -85,9 +85,7 @@ def test_order_crossings_and_frame(tmp_path):
 def test_loaded_campbell_uses_the_equilibrium_contact_state():
     """Reversed torque loads the back flanks: the loaded sweep follows that state (the mesh
     mode of a pair is the same on either flank, while the open-flank state has none)."""
-    p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
-    w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
-    pair = gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4)
+    pair = gm.examples.gear_pair()
     loads = gm.balance(pair, {"pinion.torque": -50.0}, on="wheel.torque")
     camp = campbell(pair, [0.0, 100.0, 200.0], orders={"1P": 1.0}, loads=loads)
     st = camp.extra["states"]

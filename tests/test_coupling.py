@@ -12,9 +12,7 @@ RB1 = 20 * 0.004 / 2 * math.cos(math.radians(20))  # pinion base radius of the p
 
 
 def pair():
-    p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
-    w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
-    return gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4)
+    return gm.examples.gear_pair()
 
 
 class Flywheel(gm.System):

@@ -40,12 +40,10 @@ def test_helical_mesh_axial_force(helix_deg):
     """The flank normal is cos(beta_b) n_t - s sin(beta_b) z: a torque T on the pinion gives
     the axial force T tan(beta_b) / r_b on its bearing (zero for spur gears)."""
     beta = math.radians(helix_deg)
-    p = gm.Gear(20, 0.004, math.radians(20), beta, mass=1.0, inertia=1e-3)
-    w = gm.Gear(40, 0.004, math.radians(20), -beta, mass=4.0, inertia=1.6e-2)
     kz = 1e9
     sup = {"stiffness": {"x": 1e9, "y": 1e9, "z": kz, "rx": 1e7, "ry": 1e7}}
-    m = gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4, dofs="full",
-                     bearing_stiffness=sup)
+    m = gm.examples.gear_pair("full", helix_angle=beta, bearing_stiffness=sup)
+    p = m.bodies["pinion"]
     T = 100.0
     eq = gm.equilibrium(m, gm.balance(m, {"pinion.torque": T}, on="wheel.torque"))
     axial = abs(kz * eq.q["pinion.z"])
@@ -80,18 +78,13 @@ def test_spur_stage_full_contains_the_planar_modes():
     """With spur gears (no helix) the flank normals lie in the plane and the contact points at
     mid face width, so the out-of-plane motions (z, rx, ry) decouple: every planar frequency
     is also a frequency of the full stage, and the full stage adds one per new DOF."""
-    sun = gm.Gear(21, 0.01, math.radians(20), mass=50.0, inertia=0.5, face_width=0.2)
-    planet = gm.Gear(39, 0.01, math.radians(20), mass=100.0, inertia=2.0, face_width=0.2)
-    ring = gm.Gear(99, 0.01, math.radians(20), mass=500.0, inertia=50.0, internal=True,
-                   face_width=0.2)
+    gears = gm.examples.planetary_gears(face_width=0.2)
     support = {"stiffness": {"x": 1e9, "y": 1e9, "z": 5e8, "rx": 2e7, "ry": 2e7,
                              "theta": 1e9}}
     f = {}
     for level in ("planar", "full"):
-        stage = gm.planetary_stage(sun, planet, ring, n_planets=3, carrier_mass=300.0,
-                                   carrier_inertia=20.0, mesh_stiffness=5e9,
-                                   planet_bearing=support, carrier_bearing=support,
-                                   sun_support=support, ring_support=support, dofs=level)
+        stage = gm.examples.planetary_stage(level, support, gears=gears,
+                                            angles=(0.0, 2 * math.pi / 3, 4 * math.pi / 3))
         f[level] = _frequencies(stage.assemble())
     assert len(f["full"]) == 2 * len(f["planar"])
     # each planar frequency has a full one within rounding of the eigen solver (the

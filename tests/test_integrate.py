@@ -11,9 +11,7 @@ from gearmodal.integrate.system import PiecewiseLinearSystem
 
 
 def pair(mass, k, backlash, damping=0.0):
-    p = gm.Gear(20, 0.004, math.radians(20), mass=mass, inertia=mass * 0.0376**2 / 2)
-    w = gm.Gear(40, 0.004, math.radians(20), mass=4 * mass, inertia=4 * mass * 0.0752**2 / 2)
-    return gm.gear_pair(p, w, mesh_stiffness=k, backlash=backlash, mesh_damping=damping)
+    return gm.examples.disk_pair(mass, k, backlash, damping)
 
 
 def energy_drift(model, sim):

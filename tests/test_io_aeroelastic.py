@@ -2,7 +2,6 @@
 writers below follow the formats independently of the readers), read back and used to drive
 the gearbox."""
 
-import math
 import struct
 
 import numpy as np
@@ -138,9 +137,7 @@ def test_loads_from_files_drive_the_gearbox(tmp_path):
     pytest.importorskip("wetb")
     write_out(tmp_path / "run.out")
     write_hawc2(tmp_path / "h2", binary=False)
-    p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
-    w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
-    m = gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4, mesh_damping=500.0)
+    m = gm.examples.gear_pair(mesh_damping=500.0)
     m.add(gm.Bearing("out", "wheel", None, stiffness={"theta": 1e5}))
     ref = gm.simulate(m, 0.2, dt=1e-3,
                       loads={"pinion.torque": pd.Series(1e-3 * CHANNELS["RotTorq"][1] * 1e3,

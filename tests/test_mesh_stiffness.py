@@ -147,14 +147,9 @@ def test_planet_mesh_phases_and_rates():
     """Parker & Lin's phasing: planet n's ring mesh leads by z_r psi_n / 2 pi, its sun mesh
     lags by z_s psi_n / 2 pi (periods); every mesh of the stage runs z_r periods per carrier
     revolution."""
-    sun = gm.Gear(21, 0.01, math.radians(20), mass=50.0, inertia=0.5)
-    planet = gm.Gear(39, 0.01, math.radians(20), mass=100.0, inertia=2.0)
-    ring = gm.Gear(99, 0.01, math.radians(20), mass=500.0, inertia=50.0, internal=True)
     angles = [0.0, 2.0, 4.2]
-    st = gm.planetary_stage(sun, planet, ring, n_planets=3, planet_angles=angles,
-                            carrier_mass=300.0, carrier_inertia=20.0, mesh_stiffness=5e9,
-                            planet_bearing=2e9, carrier_bearing=1e9, sun_support=1e7,
-                            mesh_alternation=True)
+    st = gm.examples.planetary_stage(angles=angles, planet_bearing=2e9, sun_support=1e7,
+                                     ring_support=None, mesh_alternation=True)
     asm = st.assemble()
     c, v = asm.contacts, asm.contacts.variation
     assert len(v) == 12

@@ -18,9 +18,9 @@ ALPHA = math.radians(24.6)
 
 def test_gear_pair_torsional_frequency_closed_form():
     """omega^2 = k (r_p^2 / I_p + r_w^2 / I_w) for the torsional pair; plus one rigid mode."""
-    p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
-    w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
-    res = modal(gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4))
+    pair = gm.examples.gear_pair()
+    p, w = pair.bodies["pinion"], pair.bodies["wheel"]
+    res = modal(pair)
     f = math.sqrt(2e8 * (p.base_radius**2 / 1e-3 + w.base_radius**2 / 1.6e-2)) / 2 / math.pi
     assert res.frequencies_hz[1] == pytest.approx(f, rel=1e-12)
     assert res.frequencies_hz[0] < 1e-6 * f

@@ -11,9 +11,7 @@ DEG20 = math.radians(20)
 
 
 def pair(dofs="torsional", **kw):
-    p = gm.Gear(20, 0.004, DEG20, mass=1.0, inertia=1e-3)
-    w = gm.Gear(40, 0.004, DEG20, mass=4.0, inertia=1.6e-2)
-    return gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4, dofs=dofs, **kw)
+    return gm.examples.gear_pair(dofs, **kw)
 
 
 def test_gear_base_radius_spur_and_helical():

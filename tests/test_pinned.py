@@ -11,16 +11,11 @@ import pytest
 import gearmodal as gm
 from gearmodal.errors import ModelError
 
-SUN = gm.Gear(21, 0.01, math.radians(20), mass=50.0, inertia=0.5)
-PLANET = gm.Gear(39, 0.01, math.radians(20), mass=100.0, inertia=2.0)
-RING = gm.Gear(99, 0.01, math.radians(20), mass=500.0, inertia=50.0, internal=True)
+SUN, PLANET, RING = gm.examples.planetary_gears()
 
 
 def _stage(dofs, support, angles=(0.0, 2.0, 4.3)):
-    return gm.planetary_stage(SUN, PLANET, RING, n_planets=3, planet_angles=list(angles),
-                              carrier_mass=300.0, carrier_inertia=20.0, mesh_stiffness=5e9,
-                              planet_bearing=support, carrier_bearing=support,
-                              sun_support=support, ring_support=support, dofs=dofs)
+    return gm.examples.planetary_stage(dofs, support, angles=angles)
 
 
 def _frequencies(asm):

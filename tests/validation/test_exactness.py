@@ -18,10 +18,9 @@ def propagator(request):
 
 
 def pair(backlash):
-    p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=I_P)
-    w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=I_W)
-    return gm.gear_pair(p, w, mesh_stiffness=K_MESH, backlash=backlash), p.base_radius, \
-        w.base_radius
+    m = gm.examples.gear_pair(pinion_inertia=I_P, wheel_inertia=I_W, mesh_stiffness=K_MESH,
+                              backlash=backlash)
+    return m, m.bodies["pinion"].base_radius, m.bodies["wheel"].base_radius
 
 
 def rattle_times(b, rp, rw, approach, n):
