@@ -250,46 +250,53 @@ def _acts(w: np.ndarray) -> bool:
     return bool(np.abs(w).max(initial=0.0) > 1e-12)
 
 
+def _structure(element) -> tuple:
+    """(name, stage, planet, role) of an element, as its contact rows carry them."""
+    return (element.name, getattr(element, "stage", ""), getattr(element, "planet", None) or "",
+            getattr(element, "role", ""))
+
+
 class _Rows:
     """Rows of one kind (unilateral contacts, linear springs, round clearances) as the
     elements add them: the columns of :class:`Contacts`."""
 
+    _FIELDS = ("W", "offset", "stiffness", "damping", "nominal", "element", "contact", "angle",
+               "columns", "stage", "planet", "role")
+
     def __init__(self):
-        self.W, self.offset, self.stiffness, self.damping, self.nominal = [], [], [], [], []
-        self.element, self.contact, self.angle, self.columns = [], [], [], []
-        self.stage, self.planet, self.role = [], [], []
-        self.variation = []
+        self.rows: list[tuple] = []
+        self.variation: list[tuple] = []
+        self._element, self._meta = None, ()
+
+    def __len__(self) -> int:
+        return len(self.rows)
 
     def add(self, w, offset, k, c, nominal, element, label, angle=np.nan, columns=()):
-        self.W.append(w)
-        self.offset.append(offset)
-        self.stiffness.append(k)
-        self.damping.append(c)
-        self.nominal.append(nominal)
-        self.element.append(element.name)
-        self.contact.append(label)
-        self.angle.append(angle)
-        self.columns.append(tuple(columns))
-        self.stage.append(getattr(element, "stage", ""))
-        self.planet.append(getattr(element, "planet", None) or "")
-        self.role.append(getattr(element, "role", ""))
-        return len(self.W) - 1
+        if element is not self._element:  # an element adds its rows in a run
+            self._element, self._meta = element, _structure(element)
+        meta = self._meta
+        self.rows.append((w, offset, k, c, nominal, meta[0], label, angle, tuple(columns),
+                          *meta[1:]))
+        return len(self.rows) - 1
 
     def contacts(self, kind, n: int) -> Contacts:
-        k = len(self.W)
+        k = len(self.rows)
+        cols = dict(zip(self._FIELDS, zip(*self.rows, strict=True), strict=True)) if k \
+            else dict.fromkeys(self._FIELDS, ())
         kinds = kind if isinstance(kind, list) else [kind] * k
         out = Contacts(
-            element=self.element, contact=self.contact, kind=kinds,
-            W=np.array(self.W) if k else np.zeros((0, n)),
-            offset=np.array(self.offset, dtype=float),
-            stiffness=np.array(self.stiffness, dtype=float),
-            damping=np.array(self.damping, dtype=float),
-            nominal=np.array(self.nominal, dtype=bool), angle=np.array(self.angle, dtype=float),
-            columns=self.columns, stage=self.stage, planet=self.planet, role=self.role)
+            element=list(cols["element"]), contact=list(cols["contact"]), kind=kinds,
+            W=np.array(cols["W"]) if k else np.zeros((0, n)),
+            offset=np.array(cols["offset"], dtype=float),
+            stiffness=np.array(cols["stiffness"], dtype=float),
+            damping=np.array(cols["damping"], dtype=float),
+            nominal=np.array(cols["nominal"], dtype=bool),
+            angle=np.array(cols["angle"], dtype=float), columns=list(cols["columns"]),
+            stage=list(cols["stage"]), planet=list(cols["planet"]), role=list(cols["role"]))
         if self.variation:
-            cols = list(zip(*self.variation, strict=True))
-            out.variation = MeshVariation(np.array(cols[0], dtype=np.int64),
-                                          *(np.array(c, dtype=float) for c in cols[1:]))
+            v = list(zip(*self.variation, strict=True))
+            out.variation = MeshVariation(np.array(v[0], dtype=np.int64),
+                                          *(np.array(c, dtype=float) for c in v[1:]))
         return out
 
 
@@ -335,9 +342,13 @@ class Contributions:
     def row(self, parts, azimuth: float | None = None) -> np.ndarray:
         """A row of the state from ``[(body, J6), ...]``: ``sum J6 @ T_body`` on each body's
         coordinates (J6: the row's gradient in the body centre's global 6-vector)."""
-        w = np.zeros(self.n)
+        az = self.azimuth if azimuth is None else azimuth
+        cache, w = self._transforms, np.zeros(self.n)
         for body, J in parts:
-            w[self.slices[body.name]] += J @ self.transform(body, azimuth)
+            T = cache.get((body.name, az))
+            if T is None:
+                T = cache[(body.name, az)] = body_transform(self.model, body, az)
+            w[self.slices[body.name]] += J @ T
         return w
 
     def contact(self, w, offset: float, k: float, c: float, nominal: bool, element,
@@ -347,17 +358,25 @@ class Contributions:
         ``k p + c p'`` while ``p > 0``, added with ``weight`` to each result force column of
         ``columns`` (``[(column, weight), ...]``); ``variation`` an alternating stiffness
         ``(rate, phase, double, k_single, k_double)``. Returns the contact's row."""
-        i = self.contacts.add(w, offset, k, c, nominal, element, label, angle, columns)
+        rows = self.contacts  # _Rows.add inlined: polygons add hundreds of rows
+        if element is not rows._element:
+            rows._element, rows._meta = element, _structure(element)
+        meta = rows._meta
+        rows.rows.append((w, offset, k, c, nominal, meta[0], label, angle, tuple(columns),
+                          *meta[1:]))
         self.kinds.append(kind)
+        i = len(rows.rows) - 1
         if variation is not None:
-            self.contacts.variation.append((i, *variation))
+            rows.variation.append((i, *variation))
         return i
 
     def spring(self, w, k: float, c: float, element, direction: str, acts: bool) -> None:
         """An always-active spring-damper on the deflection ``w q``: ``k w w^T`` and
         ``c w w^T``; listed (for its force column ``<element>.<direction>``) if it ``acts``."""
-        self.K += k * np.outer(w, w)
-        self.C += c * np.outer(w, w)
+        ww = np.outer(w, w)
+        self.K += k * ww
+        if c:
+            self.C += c * ww
         if acts:
             self.springs.add(w, 0.0, k, c, True, element, direction)
 
@@ -406,7 +425,7 @@ def assemble(model, azimuth: float = 0.0) -> Assembly:
     B = np.array(cols).T if cols else np.zeros((n, 0))
     contacts = ctx.contacts.contacts(ctx.kinds, n)
     springs = ctx.springs.contacts("spring", n)
-    nr = len(ctx.round.W)
+    nr = len(ctx.round)
     round_ = ctx.round.contacts("round", n) if nr else None
     return Assembly(dof_names=model.dof_names, load_names=load_names, M=ctx.M, C=ctx.C,
                     K=ctx.K, G=ctx.G, K_cent=ctx.K_cent, f_cent=ctx.f_cent, B=B,

@@ -166,10 +166,11 @@ class Bearing:
             # proportion to stiffness; its force resolved on the bearing's x and y
             kr, cr = self.stiffness["x"], self.damping.get("x", 0.0)
             offsets, kms = polygon_ramps(self.clearance["x"], kr, self.facets, self.ramps)
+            x, y = f"{self.name}.x", f"{self.name}.y"
             for i in range(self.facets):
                 a_i = 2.0 * math.pi * i / self.facets
                 w = math.cos(a_i) * gx + math.sin(a_i) * gy
-                cols = [(f"{self.name}.x", math.cos(a_i)), (f"{self.name}.y", math.sin(a_i))]
+                cols = ((x, math.cos(a_i)), (y, math.sin(a_i)))
                 for m_, (o, km) in enumerate(zip(offsets, kms, strict=True)):
                     ctx.contact(w, o, km, cr * km / kr if kr else 0.0, False, self,
                                 f"facet{i}_{m_}", "bearing", columns=cols, angle=a_i)
