@@ -58,14 +58,60 @@ from pathlib import Path
 from .errors import ModelError
 from .model import validate as v
 from .model.model import Model
+from .model.schema import REQUIRED, Field, Table
 
-_SCENE_KEYS = {"model", "t_end", "dt", "method", "speed_rpm", "tolerance"}
-_TOP = {"scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind"}
-_TURBINE_KEYS = {"file", "rotor_speed0_rpm", "azimuth0_deg", "connected",
-                 "mounting_azimuth_deg", "aero_dt", "aero_hold", "rebase_speed",
-                 "rebase_angle"}
-_LOAD_FILE_KEYS = {"path", "format", "t_start", "mapping"}
-_WAVE = {"mean", "amplitude", "frequency_hz", "phase_deg", "phase"}
+METHODS = ("exact", "newmark", "scipy", "auto")
+_LOAD_UNIT = "N or N m"
+#: the tables of a scene file (:mod:`gearmodal.model.schema`; ``docs/file-format.md``)
+SCENE = Table("scene", (
+    Field("model", "path", default=REQUIRED, doc="model file, relative to the scene file"),
+    Field("t_end", "number", "s", low=0.0, low_open=True, default=REQUIRED, doc="run length"),
+    Field("dt", "number", "s", low=0.0, low_open=True, default=REQUIRED,
+          doc="propagation and output step, at most t_end"),
+    Field("method", "choice", choices=METHODS, default="exact", doc="integrator"),
+    Field("speed_rpm", "number", "rpm", low=0.0,
+          doc="input speed (default 0; turbine scenes: the rotor's, not this)"),
+    Field("tolerance", "number", low=0.0, high=10.0, low_open=True, high_open=True,
+          doc="method = \"auto\" only: relative tolerance on the study quantities "
+              "(default 0.05)")),
+    "The run: model, length, step, method.")
+WAVE = Table("loads.<name> as a table", (
+    Field("mean", "number", _LOAD_UNIT, default=0.0, doc="mean"),
+    Field("amplitude", "number", _LOAD_UNIT, default=0.0, doc="amplitude"),
+    Field("frequency_hz", "number", "Hz", low=0.0, default=0.0, doc="frequency"),
+    Field("phase_deg", "number", "deg", doc="phase (default 0)"),
+    Field("phase", "number", "rad", doc="phase in rad (what Scene.dumps writes; exact)")),
+    "A load `mean + amplitude sin(2 pi frequency_hz t + phase)`; a load may also be a number "
+    "or \"balance\" (the value that balances the others' mean).")
+LOAD_FILE = Table("load_file", (
+    Field("path", "path", default=REQUIRED, doc="HAWC2 or OpenFAST output, relative to the "
+          "scene file"),
+    Field("format", "choice", choices=("openfast", "hawc2"),
+          doc="file format (default: from the extension)"),
+    Field("t_start", "number", "s", low=0.0, default=0.0, doc="time of the file that becomes "
+          "t = 0"),
+    Field("mapping", "table", default=REQUIRED, doc="gearmodal load name = channel, or "
+          "[channel, factor]")),
+    "Loads from an aeroelastic code's output file.")
+TURBINE = Table("turbine", (
+    Field("file", "path", default=REQUIRED, doc="turbine file, relative to the scene file"),
+    Field("rotor_speed0_rpm", "number", "rpm", low=0.0, high=1e3,
+          doc="initial rotor speed (default 6)"),
+    Field("azimuth0_deg", "number", "deg", doc="initial blade-1 azimuth (default 0)"),
+    Field("connected", "boolean", doc="start on the grid (default false: cut in at "
+          "synchronous speed)"),
+    Field("mounting_azimuth_deg", "number", "deg", doc="overrides the turbine file's"),
+    Field("aero_dt", "number", "s", low=0.0, low_open=True, high=10.0,
+          doc="aerodynamic step, a whole multiple of dt (default 0.02)"),
+    Field("aero_hold", "choice", choices=("interpolate", "hold", "linear"),
+          doc="loads between aerodynamic steps (default interpolate)"),
+    Field("rebase_speed", "number", low=0.0, low_open=True, high=1.0,
+          doc="speed drift that re-bases the reference rotation (default 0.01)"),
+    Field("rebase_angle", "number", "rad", low=0.0, low_open=True, high=1.0,
+          doc="rigid rotation that re-bases it (default 5e-4)")),
+    "The turbine in wind, simulated with the gearbox of scene.model.")
+#: the scene file's tables
+TABLES = ("scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind")
 
 
 @dataclass
@@ -191,17 +237,6 @@ class Scene:
                         **self.options)
 
 
-def _check_keys(table: str, spec: dict, allowed, required=()) -> None:
-    """Errors naming ``table.key`` for an unknown or a missing key of a scene table."""
-    for key in spec:
-        if key not in allowed:
-            raise ModelError(f"{table}.{key}", "unknown key; allowed: "
-                             + ", ".join(sorted(allowed)))
-    for key in required:
-        if key not in spec:
-            raise ModelError(f"{table}.{key}", "missing")
-
-
 @dataclass(frozen=True)
 class Wave:
     """A load ``mean + amplitude sin(2 pi frequency_hz t + phase)`` (N or N m; ``phase`` in
@@ -219,17 +254,11 @@ class Wave:
 
 
 def _wave(field_: str, spec: dict):
-    _check_keys(field_, spec, _WAVE)
-    mean = v.number(f"{field_}.mean", spec.get("mean", 0.0), "N or N m")
-    amp = v.number(f"{field_}.amplitude", spec.get("amplitude", 0.0), "N or N m")
-    f = v.nonnegative(f"{field_}.frequency_hz", spec.get("frequency_hz", 0.0), "Hz")
-    if "phase" in spec and "phase_deg" in spec:
+    w = WAVE.read(field_, spec)
+    if "phase" in w and "phase_deg" in w:
         raise ModelError(f"{field_}.phase", "given twice (phase in rad and phase_deg); give one")
-    if "phase" in spec:  # radians, as Scene.dumps writes it (exact)
-        ph = v.number(f"{field_}.phase", spec["phase"], "rad")
-    else:
-        ph = math.radians(v.number(f"{field_}.phase_deg", spec.get("phase_deg", 0.0), "deg"))
-    return Wave(mean, amp, f, ph), mean
+    ph = w["phase"] if "phase" in w else math.radians(w.get("phase_deg", 0.0))
+    return Wave(w["mean"], w["amplitude"], w["frequency_hz"], ph), w["mean"]
 
 
 def load_scene(path, overrides: dict | None = None) -> Scene:
@@ -242,11 +271,21 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     """
     p = Path(path)
     try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
+        raw = p.read_bytes()
     except FileNotFoundError:
         raise ModelError(str(p), "no such scene file") from None
+    except (OSError, ValueError) as e:  # a directory, a NUL in the path
+        why = getattr(e, "strerror", None) or e
+        raise ModelError(str(p), f"cannot read the scene file: {why}") from None
+    try:
+        doc = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as e:
+        raise ModelError(str(p), f"not a UTF-8 text file ({e.reason} at byte {e.start})") \
+            from None
     except tomllib.TOMLDecodeError as e:
         raise ModelError(str(p), f"TOML syntax error: {e}") from None
+    except RecursionError:
+        raise ModelError(str(p), "TOML nested too deeply") from None
     from .model.toml_io import override
 
     overrides = dict(overrides or {})
@@ -260,37 +299,36 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
 
 def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
     for key in doc:
-        if key not in _TOP:
-            raise ModelError(key, "unknown table; allowed: " + ", ".join(sorted(_TOP)))
-    sc = doc.get("scene")
-    if not isinstance(sc, dict):
+        if key not in TABLES:
+            raise ModelError(key, "unknown table; allowed: " + ", ".join(TABLES))
+    for key in ("loads", "q0", "v0", "options", "load_file", "turbine", "wind"):
+        if key in doc and not isinstance(doc[key], dict):
+            raise ModelError(key, f"expected a table [{key}], got {type(doc[key]).__name__} "
+                                  f"{doc[key]!r}")
+    if not isinstance(doc.get("scene"), dict):
         raise ModelError("scene", "missing: the [scene] table with model, t_end, dt")
-    _check_keys("scene", sc, _SCENE_KEYS, ("model", "t_end", "dt"))
-    if not isinstance(sc["model"], str):
-        raise ModelError("scene.model", f"= {sc['model']!r}: expected a path to a model file")
+    raw = doc["scene"]
+    if "model" not in raw:
+        raise ModelError("scene.model", "missing: required key (the model file)")
+    model_file = SCENE.by_key()["model"].read("scene.model", raw["model"])
     from .model.toml_io import load
 
-    try:
-        model = load(p.parent / sc["model"], overrides=model_overrides)
+    try:  # the model first: its errors are the first a new scene meets
+        model = load(p.parent / model_file, overrides=model_overrides)
     except ModelError as e:
         if e.field.startswith("overrides."):  # a sweep's model key: name it as given
             raise ModelError("model." + e.field[len("overrides."):], e.message) from None
         raise
-    t_end = v.positive("scene.t_end", sc["t_end"], "s")
-    dt = v.positive("scene.dt", sc["dt"], "s")
+    sc = SCENE.read("scene", raw)
+    t_end, dt, method = sc["t_end"], sc["dt"], sc["method"]
     if dt > t_end:
         raise ModelError("scene.dt", f"= {dt!r}: must be at most scene.t_end = {t_end!r} s")
-    method = v.choice("scene.method", sc.get("method", "exact"),
-                      ("exact", "newmark", "scipy", "auto"))
     tolerance = 0.05
     if "tolerance" in sc:
         if method != "auto":
             raise ModelError("scene.tolerance", "is used by method = 'auto' only")
-        tolerance = v.number("scene.tolerance", sc["tolerance"], "relative")
-        if not 0 < tolerance < 10:
-            raise ModelError("scene.tolerance", f"= {tolerance!r}: must be a relative "
-                             "tolerance in (0, 10), e.g. 0.05")
-    speed = v.nonnegative("scene.speed_rpm", sc.get("speed_rpm", 0.0), "rpm")
+        tolerance = sc["tolerance"]
+    speed = sc.get("speed_rpm", 0.0)
     loads, means, balance = {}, {}, None
     load_file = {}
     if "load_file" in doc:
@@ -307,7 +345,7 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
         elif isinstance(spec, dict):
             loads[name], means[name] = _wave(f, spec)
         else:
-            loads[name] = means[name] = v.number(f, spec, "N or N m")
+            loads[name] = means[name] = v.number(f, spec, _LOAD_UNIT)
     asm = model.assemble()
     for name in [*loads, *([balance] if balance else [])]:
         if name not in asm.load_names:
@@ -347,43 +385,24 @@ def _load_file(spec: dict, p: Path) -> dict:
     """``[load_file]``: loads as Series from an aeroelastic output file."""
     from .io import read_loads, shaft_loads
 
-    if not isinstance(spec, dict):
-        raise ModelError("load_file", "expected a table with path and mapping")
-    _check_keys("load_file", spec, _LOAD_FILE_KEYS, ("path", "mapping"))
-    if not isinstance(spec["mapping"], dict) or not spec["mapping"]:
+    lf = LOAD_FILE.read("load_file", spec)
+    if not lf["mapping"]:
         raise ModelError("load_file.mapping", "expected a table: load name = channel")
-    path = p.parent / str(spec["path"])
-    if not path.exists():
-        raise ModelError("load_file.path", f"= {str(spec['path'])!r}: no such file ({path})")
-    data = read_loads(path, spec.get("format"))
-    t0 = v.nonnegative("load_file.t_start", spec.get("t_start", 0.0), "s")
-    return shaft_loads(data, dict(spec["mapping"]), t_start=t0)
+    path = p.parent / lf["path"]
+    if not path.is_file():
+        raise ModelError("load_file.path", f"= {lf['path']!r}: no such file ({path})")
+    data = read_loads(path, lf.get("format"))
+    return shaft_loads(data, dict(lf["mapping"]), t_start=lf["t_start"])
 
 
 def _turbine(spec: dict, wspec: dict, p: Path, t_end: float):
     """``[turbine]`` and ``[wind]``: the turbine, its wind and the drivetrain run options."""
     from .turbine import Wind, load_turbine
 
-    if not isinstance(spec, dict) or "file" not in spec:
-        raise ModelError("turbine.file", "missing: the turbine file (TOML)")
-    _check_keys("turbine", spec, _TURBINE_KEYS)
-    turbine = load_turbine(p.parent / str(spec["file"]))
-    if "mounting_azimuth_deg" in spec:
-        turbine.mounting_azimuth_deg = v.number("turbine.mounting_azimuth_deg",
-                                                spec["mounting_azimuth_deg"], "deg")
-    opts = {}
-    for key in ("rotor_speed0_rpm", "azimuth0_deg", "aero_dt", "rebase_speed", "rebase_angle"):
-        if key in spec:
-            opts[key] = v.number(f"turbine.{key}", spec[key], "")
-    if "connected" in spec:
-        if not isinstance(spec["connected"], bool):  # "false" would read as true
-            raise ModelError("turbine.connected", f"expected true or false, got "
-                             f"{type(spec['connected']).__name__} {spec['connected']!r}")
-        opts["connected"] = spec["connected"]
-    if "aero_hold" in spec:
-        opts["aero_hold"] = v.choice("turbine.aero_hold", spec["aero_hold"],
-                                     ("interpolate", "hold", "linear"))
-    _check_keys("wind", wspec, set(Wind.__dataclass_fields__))
+    tb = TURBINE.read("turbine", spec)
+    turbine = load_turbine(p.parent / tb.pop("file"))
+    if "mounting_azimuth_deg" in tb:
+        turbine.mounting_azimuth_deg = tb.pop("mounting_azimuth_deg")
     wargs = {"hub_height": turbine.hub_height, "half_width": 1.1 * turbine.rotor.radius,
-             "duration": t_end + 1.0, **wspec}
-    return turbine, Wind(**wargs), opts
+             "duration": t_end + 1.0, **Wind.SCHEMA.read("wind", wspec)}
+    return turbine, Wind(**wargs), tb

@@ -4,7 +4,7 @@ A field knows its type, unit, allowed range, whether the file gives it in degree
 and a one-line description. From the tables come the validation of a file's table
 (:meth:`Table.read`: errors name the field's path, the value, the unit and the range), the
 writer's tables (:meth:`Table.write`) and the file-format reference page
-(:func:`reference_markdown`, ``docs/file-format.md``).
+(:func:`reference_markdown`, ``docs/file-format.md``, :mod:`gearmodal.reference`).
 
 Angles are radians in the API. A field with ``degrees=True`` is given in the file in degrees
 under ``<key>_deg``; a radian field of the component tables may be given either as ``<key>``
@@ -160,9 +160,14 @@ class Field:
                 out[k] = v.number(f"{path}.{k}", x, self.unit)
                 self._in_range(f"{path}.{k}", out[k])
             return out
-        if t in ("table", "support", "per_mesh", "alternation", "any", "path"):
+        if t == "path":
+            if not isinstance(value, str) or not value or "\x00" in value:
+                raise ModelError(path, f"= {value!r}: expected a file path (a non-empty string "
+                                       "without NUL characters)")
+            return value
+        if t in ("table", "support", "per_mesh", "alternation", "any"):
             ok = {"table": (dict,), "support": (dict, int, float), "per_mesh": (dict, int, float),
-                  "alternation": (dict, bool), "any": (object,), "path": (str,)}[t]
+                  "alternation": (dict, bool), "any": (object,)}[t]
             if not isinstance(value, ok) or (t in ("support", "per_mesh") and
                                              isinstance(value, bool)):
                 raise ModelError(path, f"expected a {TYPES[t]}, got {type(value).__name__} "
@@ -325,7 +330,7 @@ def reference_markdown(sections: list[tuple[str, str, list[Table]]]) -> str:
     :class:`Table` with every field's key, type, unit, range, default and description."""
     lines = ["# File formats", "",
              "Generated from the schema (`gearmodal/model/schema.py`) by `python -m "
-             "gearmodal.model.reference`; do not "
+             "gearmodal.reference`; do not "
              "edit by hand (a test checks that it is current).", ""]
     for title, text, tables in sections:
         lines += [f"## {title}", "", text, ""]

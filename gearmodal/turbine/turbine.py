@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ModelError
+from ..model.schema import REQUIRED, Field, Table
 from .airfoil import Airfoil
 from .generator import InductionGenerator
 from .rotor import LOAD_COLUMNS, Rotor
@@ -93,31 +94,103 @@ def mark_cut_in(axs, cut_in_time: float | None) -> None:
             a.axvline(cut_in_time, color="0.6", ls="--", lw=0.8)
 
 
+#: the tables of a turbine file (:mod:`gearmodal.model.schema`); section -> (table, required)
+TURBINE_FILE = {
+    "turbine": (Table("turbine", (
+        Field("name", "string", doc="turbine name (default: the file name)"),
+        Field("gear_ratio", "number", low=0.0, low_open=True, default=REQUIRED,
+              doc="generator over rotor speed"),
+        Field("inertia", "number", "kg m^2", low=0.0, low_open=True, default=REQUIRED,
+              doc="drivetrain inertia at the rotor (turbine-only runs)"),
+        Field("hub_height", "number", "m", low=0.0, low_open=True, default=REQUIRED,
+              doc="hub height"),
+        Field("front_bearing", "number", "m", low=0.0, low_open=True, default=REQUIRED,
+              doc="front main bearing downwind of the hub centre"),
+        Field("rear_bearing", "number", "m", low=0.0, low_open=True, default=REQUIRED,
+              doc="rear main bearing (the gearbox), beyond the front one"),
+        Field("mounting_azimuth_deg", "number", "deg", default=0.0,
+              doc="planet 1 relative to blade 1")), "The turbine."), True),
+    "rotor": (Table("rotor", (
+        Field("radius", "number", "m", low=0.0, low_open=True, default=REQUIRED,
+              doc="tip radius"),
+        Field("hub_radius", "number", "m", low=0.0, low_open=True, default=REQUIRED,
+              doc="hub radius"),
+        Field("blades", "integer", low=1, high=10, default=3, doc="number of blades"),
+        Field("pitch_deg", "number", "deg", low=-90.0, high=90.0, default=0.0,
+              doc="fixed blade pitch"),
+        Field("mass", "number", "kg", low=0.0, default=REQUIRED, doc="rotor mass"),
+        Field("air_density", "number", "kg/m^3", low=0.0, low_open=True, default=1.225,
+              doc="air density")), "The rotor."), True),
+    "blade": (Table("blade", (
+        Field("r", "vector", "m", low=0.0, default=REQUIRED,
+              doc="element radii, increasing, inside (hub_radius, radius)"),
+        Field("chord", "vector", "m", low=0.0, low_open=True, default=REQUIRED,
+              doc="chord per element"),
+        Field("twist_deg", "vector", "deg", default=REQUIRED, doc="twist per element")),
+        "The blade's elements (the same length each)."), True),
+    "airfoil": (Table("airfoil", (
+        Field("lift_slope", "number", "1/rad", low=1.0, high=8.0, default=6.2,
+              doc="pre-stall lift slope"),
+        Field("alpha0_deg", "number", "deg", low=-20.0, high=20.0, default=-2.6,
+              doc="zero-lift angle"),
+        Field("stall_deg", "number", "deg", low=4.0, high=30.0, default=12.0,
+              doc="stall angle"),
+        Field("cd0", "number", low=0.0, high=0.1, default=0.008, doc="pre-stall drag"),
+        Field("k_drag", "number", low=0.0, high=10.0, default=0.6,
+              doc="pre-stall drag growth (alpha in rad)"),
+        Field("aspect_ratio", "number", low=1.0, high=1e3, default=12.0,
+              doc="blade length over mean chord (sets the post-stall maximum drag)"),
+        Field("name", "string", default="NACA 63-415 (Viterna)", doc="airfoil name")),
+        "The airfoil: pre-stall data and Viterna-Corrigan post-stall."), False),
+    "generator": (Table("generator", (
+        Field("rated_power", "number", "W", low=1.0, high=1e9, default=600e3,
+              doc="rated power"),
+        Field("sync_speed_rpm", "number", "rpm", low=1.0, high=1e5, default=1800.0,
+              doc="synchronous speed of the generator"),
+        Field("rated_slip", "number", low=1e-4, high=0.2, default=0.02,
+              doc="slip at rated power"),
+        Field("pullout_ratio", "number", low=1.05, high=10.0, default=2.5,
+              doc="pull-out over rated torque")), "The induction generator."), True),
+}
+
+
 def load_turbine(path) -> Turbine:
-    """A :class:`Turbine` from a TOML file (``studies/turbines/600kw_turbine.toml``)."""
+    """A :class:`Turbine` from a TOML file (``studies/turbines/600kw_turbine.toml``); every
+    table and key is checked (``docs/file-format.md``) and errors name the key and the file."""
     p = Path(path)
     try:
-        d = tomllib.loads(p.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as err:
-        raise ModelError("path", f"= {str(path)!r}: {err}") from err
+        d = tomllib.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, RecursionError) as err:
+        raise ModelError("path", f"= {str(path)!r}: cannot read the turbine file "
+                         f"({type(err).__name__}: {err})") from None
     try:
-        t, ro, bl, af, ge = (d["turbine"], d["rotor"], d["blade"], d.get("airfoil", {}),
-                             d["generator"])
-    except KeyError as err:
-        raise ModelError(str(err).strip("'"), "section missing in " + str(path)) from None
-    r = np.asarray(bl["r"], dtype=float)
-    rotor = Rotor(radius=ro["radius"], hub_radius=ro["hub_radius"], r=r,
+        return _turbine(d, p.stem)
+    except ModelError as e:
+        raise ModelError(e.field, f"{e.message} (in {p})") from None
+
+
+def _turbine(d: dict, default_name: str) -> Turbine:
+    for key in d:
+        if key not in TURBINE_FILE:
+            raise ModelError(key, "unknown section; allowed: " + ", ".join(TURBINE_FILE))
+    v = {}
+    for key, (table, required) in TURBINE_FILE.items():
+        if key not in d and required:
+            raise ModelError(key, f"missing section [{key}]")
+        v[key] = table.read(key, d.get(key, {}))
+    t, ro, bl, af, ge = v["turbine"], v["rotor"], v["blade"], v["airfoil"], v["generator"]
+    rotor = Rotor(radius=ro["radius"], hub_radius=ro["hub_radius"],
+                  r=np.asarray(bl["r"], dtype=float),
                   chord=np.asarray(bl["chord"], dtype=float),
                   twist=np.radians(np.asarray(bl["twist_deg"], dtype=float)),
-                  blades=int(ro.get("blades", 3)), pitch=math.radians(ro.get("pitch_deg", 0.0)),
-                  airfoil=Airfoil.viterna(**af), mass=ro["mass"],
-                  rho=ro.get("air_density", 1.225))
+                  blades=ro["blades"], pitch=math.radians(ro["pitch_deg"]),
+                  airfoil=Airfoil.viterna(**af), mass=ro["mass"], rho=ro["air_density"])
     return Turbine(rotor=rotor, generator=InductionGenerator(**ge),
                    gear_ratio=t["gear_ratio"], inertia=t["inertia"],
                    hub_height=t["hub_height"], front_bearing=t["front_bearing"],
                    rear_bearing=t["rear_bearing"],
-                   mounting_azimuth_deg=t.get("mounting_azimuth_deg", 0.0),
-                   name=t.get("name", p.stem))
+                   mounting_azimuth_deg=t["mounting_azimuth_deg"],
+                   name=t.get("name", default_name))
 
 
 @dataclass

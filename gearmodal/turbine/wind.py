@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ModelError
+from ..model.schema import Field, Table
 
 
 @dataclass
@@ -138,3 +139,29 @@ class Wind:
             shadow = 1.0 - self.tower_radius**2 * (x * x - y * y) / (r2 * r2)
             out[0] = np.where(below, out[0] * shadow, out[0])
         return out
+
+
+#: the ``[wind]`` table of a scene file (:mod:`gearmodal.model.schema`)
+Wind.SCHEMA = Table("wind", (
+    Field("mean_speed", "number", "m/s", low=0.0, high=60.0, default=10.0,
+          doc="mean wind speed at hub height"),
+    Field("hub_height", "number", "m", low=1.0, high=500.0,
+          doc="hub height (default: the turbine's)"),
+    Field("shear_exponent", "number", low=0.0, high=1.0, default=0.2,
+          doc="power-law shear exponent (IEC normal wind profile: 0.2)"),
+    Field("turbulence_intensity", "number", low=0.0, high=1.0, default=0.0,
+          doc="longitudinal standard deviation over the mean (0: no turbulence)"),
+    Field("seed", "integer", low=0, high=2**32 - 1, default=1, doc="seed of the turbulence"),
+    Field("duration", "number", "s", low=1e-3, high=1e5,
+          doc="turbulence to generate (default: the scene's t_end + 1 s)"),
+    Field("dt", "number", "s", low=1e-3, high=10.0, default=0.1,
+          doc="step of the turbulence samples"),
+    Field("half_width", "number", "m", low=0.1, high=500.0,
+          doc="the grid covers hub +- half_width (default: 1.1 rotor radii)"),
+    Field("grid_points", "integer", low=2, high=64, default=7,
+          doc="grid points per side (the box grows as their square)"),
+    Field("tower_radius", "number", "m", low=0.0, high=20.0, default=1.0,
+          doc="tower radius (0: no tower shadow)"),
+    Field("tower_distance", "number", "m", low=0.0, low_open=True, default=2.5,
+          doc="rotor plane to tower axis")),
+    "Wind of a turbine scene (`gearmodal.turbine.Wind`).")

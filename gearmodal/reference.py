@@ -2,8 +2,8 @@
 
 Regenerate after changing a schema (a test fails while the page is not current)::
 
-    python -m gearmodal.model.reference            # writes docs/file-format.md
-    python -m gearmodal.model.reference --check    # exit 1 if it is not current
+    python -m gearmodal.reference            # writes docs/file-format.md
+    python -m gearmodal.reference --check    # exit 1 if it is not current
 """
 
 from __future__ import annotations
@@ -11,12 +11,15 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from . import file_schema as fs
-from .bearing import Bearing
-from .components import Body, Frame, Gear, RigidBody
-from .dump import GROUPS_TABLE, MODEL_TABLE
-from .mesh import Mesh
-from .schema import Table, reference_markdown
+from . import scene
+from .model import file_schema as fs
+from .model.bearing import Bearing
+from .model.components import Body, Frame, Gear, RigidBody
+from .model.dump import GROUPS_TABLE, MODEL_TABLE
+from .model.mesh import Mesh
+from .model.schema import Table, reference_markdown
+from .turbine.turbine import TURBINE_FILE
+from .turbine.wind import Wind
 
 #: the page, relative to the repository root
 PAGE = Path("docs") / "file-format.md"
@@ -39,6 +42,19 @@ round-trips through it to exactly the same matrices. Angles are radians under th
 (exact), or degrees under `<key>_deg`. Bodies are assembled in file order (the DOF order)."""
 
 
+_SCENE_TEXT = """\
+A scene file (`gearmodal simulate SCENE`, `gearmodal.scene.load_scene`) names a model file and
+the run: `[scene]`, `[loads]` (by load name: a number in N or N m, a wave table, or
+`"balance"`), `[q0]` and `[v0]` (initial displacements and velocities by DOF name), `[options]`
+(options of the method, refused by name if it has no such option), `[load_file]`, or a turbine
+run: `[turbine]` with `[wind]` (then no `[loads]`, `[q0]`, `[v0]`, `scene.speed_rpm`).
+`scene.dumps()` writes a scene back."""
+
+_TURBINE_TEXT = """\
+A turbine file (`gearmodal.turbine.load_turbine`) describes the rotor side of a turbine run;
+`studies/turbines/600kw_turbine.toml` is the paper's 600 kW turbine. `[airfoil]` is optional."""
+
+
 def sections() -> list[tuple[str, str, list[Table]]]:
     """The page's sections: (title, text, tables)."""
     groups = Table("groups", (GROUPS_TABLE,), "Named lists of bodies (`[groups]`).")
@@ -49,6 +65,9 @@ def sections() -> list[tuple[str, str, list[Table]]]:
         ('Model files, component by component (type = "components")', _COMPONENT_TEXT,
          [MODEL_TABLE, Frame.SCHEMA, Gear.SCHEMA, RigidBody.SCHEMA, Body.SCHEMA, Mesh.SCHEMA,
           Bearing.SCHEMA, groups]),
+        ("Scene files", _SCENE_TEXT,
+         [scene.SCENE, scene.WAVE, scene.LOAD_FILE, scene.TURBINE, Wind.SCHEMA]),
+        ("Turbine files", _TURBINE_TEXT, [t for t, _ in TURBINE_FILE.values()]),
     ]
 
 
@@ -64,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     if "--check" in argv:
         current = PAGE.read_text(encoding="utf-8") if PAGE.exists() else ""
         if current != text:
-            print(f"{PAGE} is not current: run python -m gearmodal.model.reference",
+            print(f"{PAGE} is not current: run python -m gearmodal.reference",
                   file=sys.stderr)
             return 1
         return 0
