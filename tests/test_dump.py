@@ -126,7 +126,7 @@ def test_a_components_file_accepts_degrees_and_names_its_fields_in_errors():
     assert gm.loads(deg).bodies["pinion"].pressure_angle == math.radians(20.0)
     cases = [
         (text.replace("mass = 1.0", "mass = -1.0"),
-         r"bodies\[0\]\.mass = -1\.0 kg: must be > 0"),
+         r"bodies\[0\]\.mass = -1\.0: must be > 0 kg"),
         (text.replace("mass = 1.0", "mas = 1.0"), r"bodies\[0\]\.mas: unknown key"),
         (text.replace('kind = "gear"', 'kind = "cog"', 1), r"bodies\[0\]\.kind = 'cog'"),
         (text.replace('gear_b = "wheel"', 'gear_b = "whel"'),

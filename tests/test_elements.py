@@ -95,7 +95,7 @@ def test_the_new_kind_round_trips_through_a_model_file():
     assert "[[end_stops]]" in text
     again = gm.loads(text)
     np.testing.assert_array_equal(again.assemble().contacts.W, m.assemble().contacts.W)
-    with pytest.raises(gm.ModelError, match=r"end_stops\[0\]\.play = -1\.0 rad: must be >= 0"):
+    with pytest.raises(gm.ModelError, match=r"end_stops\[0\]\.play = -1\.0: must be >= 0 rad"):
         gm.loads(text.replace(f"play = {PLAY!r}", "play = -1.0"))
 
 

@@ -45,7 +45,7 @@ MODEL = Table("model", (
 GEAR = Table("gear (sun, planet, ring, gear, pinion, wheel)", (
     Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth"),
     Field("module", "number", "m", **_POS, high=1.0, default=REQUIRED,
-          doc="normal module (10 mm = 0.010)"),
+          doc="normal module (10 mm = 0.010)", note="modules are in metres: 10 mm = 0.010"),
     Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 4, high_open=True,
           degrees=True, default=REQUIRED, doc="normal pressure angle"),
     Field("helix_angle", "angle", "rad", low=-math.pi / 4, high=math.pi / 4, high_open=True,
@@ -72,8 +72,9 @@ SUPPORT = Table("support (a bearing given as a table)", (
 _STAGE_COMMON = (
     Field("type", "choice", choices=STAGE_TYPES, doc="stage type (in `[[stages]]`: required)"),
     Field("name", "name", doc="DOF name prefix in a drivetrain (default `stage<k>`)"),
-    Field("coupling_stiffness", "number", "N m/rad", **_NONNEG, default=1e9,
-          doc="torsional coupling to the previous stage's output (not on the first stage)"),
+    Field("coupling_stiffness", "number", "N m/rad", **_NONNEG,
+          doc="torsional coupling to the previous stage's output (not on the first stage; "
+              "default 1e9)"),
     dataclasses.replace(_DOFS, default="planar"),
     Field("mesh_stiffness", "per_mesh", "N/m", **_NONNEG, default=REQUIRED,
           doc="mesh stiffness on the line of action"),
@@ -118,8 +119,8 @@ GEAR_PAIR = Table("gear_pair", (
     "Two external gears on bearings.")
 LIN_PARKER = Table("lin_parker_stage", (
     Field("n_planets", "integer", low=1, default=REQUIRED, doc="number of planets"),
-    Field("pressure_angle", "angle", "rad", degrees=True, default=REQUIRED,
-          doc="a number or {sun_planet, ring_planet}"),
+    Field("pressure_angle_deg", "per_mesh", "deg", default=REQUIRED,
+          doc="pressure angle, a number or {sun_planet, ring_planet}"),
     Field("planet_angles", "vector", "rad", degrees=True,
           doc="planet positions (default equally spaced)"),
     Field("backlash", "number", "m", **_NONNEG, default=0.0, doc="backlash"),
@@ -131,10 +132,24 @@ LIN_PARKER = Table("lin_parker_stage", (
           doc="carrier, ring, sun (on u = r theta)"),
     Field("mesh", "table", "N/m", default=REQUIRED, doc="sun_planet, ring_planet")),
     "Lin & Parker's (1999) planar stage in their notation.")
+PER_MESH_ANGLE = Table("lin_parker_stage pressure angles", (
+    Field("sun_planet", "number", "deg", low=math.degrees(1e-6), high=90.0, high_open=True,
+          default=REQUIRED, doc="sun-planet meshes"),
+    Field("ring_planet", "number", "deg", low=math.degrees(1e-6), high=90.0, high_open=True,
+          default=REQUIRED, doc="ring-planet meshes")),
+    "Lin & Parker's pressure angles per mesh kind, in degrees.")
 PER_MESH = Table("per mesh (sun_planet, ring_planet)", (
-    Field("sun_planet", "number", "N/m", default=REQUIRED, doc="sun-planet meshes"),
-    Field("ring_planet", "number", "N/m", default=REQUIRED, doc="ring-planet meshes")),
+    Field("sun_planet", "number", "N/m", **_NONNEG, default=REQUIRED, doc="sun-planet meshes"),
+    Field("ring_planet", "number", "N/m", **_NONNEG, default=REQUIRED,
+          doc="ring-planet meshes")),
     "A value per mesh kind.")
+_BODIES4 = ("carrier", "ring", "sun", "planet")
+LIN_PARKER_BODIES = Table("lin_parker_stage per body", tuple(
+    Field(b, "number", default=REQUIRED, doc=b) for b in _BODIES4),
+    "A value per body (`mass`, `inertia_over_r2`, `bearing`).")
+LIN_PARKER_CENTRAL = Table("lin_parker_stage per central body", tuple(
+    Field(b, "number", default=REQUIRED, doc=b) for b in _BODIES4[:3]),
+    "A value per central body (`torsional`).")
 #: the sections of each model type: section -> required
 SECTIONS = {
     "drivetrain": {"model": True, "rotor": True, "main_shaft": True, "shaft_bending": False,

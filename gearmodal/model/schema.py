@@ -13,6 +13,7 @@ under ``<key>_deg``; a radian field of the component tables may be given either 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -60,7 +61,8 @@ class Field:
         for an optional value the component fills in (written only when set).
     doc : a one-line description (the reference page).
     choices : allowed values of a ``choice``.
-    length : number of entries of a ``vector`` (``lengths`` if several are allowed).
+    lengths : the allowed numbers of entries of a ``vector`` (any if empty).
+    note : a hint added to range errors (``modules are in metres: 10 mm = 0.010``).
     """
 
     key: str
@@ -75,6 +77,7 @@ class Field:
     doc: str = ""
     choices: tuple = ()
     lengths: tuple = ()
+    note: str = ""
 
     @property
     def required(self) -> bool:
@@ -151,7 +154,8 @@ class Field:
         if t == "directions":
             if not isinstance(value, dict):
                 raise ModelError(path, f"expected a table keyed by direction "
-                                       f"({', '.join(DIRECTIONS)}), got {value!r}")
+                                       f"({', '.join(DIRECTIONS)}), got "
+                                       f"{type(value).__name__} {value!r}")
             out = {}
             for k, x in value.items():
                 if k not in DIRECTIONS:
@@ -186,12 +190,15 @@ class Field:
         raise AssertionError(f"unknown field type {t!r}")
 
     def _in_range(self, path: str, x: float) -> None:
-        lo, hi = self.low, self.high
-        bad = ((lo is not None and (x <= lo if self.low_open else x < lo))
-               or (hi is not None and (x >= hi if self.high_open else x > hi)))
-        if bad:
-            u = f" {self.unit}" if self.unit else ""
-            raise ModelError(path, f"= {x!r}{u}: must be {self.range_text()}")
+        """Raise naming the bound ``x`` violates (``= -3.0: must be > 0 kg``)."""
+        u = f" {self.unit}" if self.unit else ""
+        msg = None
+        if self.low is not None and (x <= self.low if self.low_open else x < self.low):
+            msg = f"must be {'>' if self.low_open else '>='} {self.low:g}{u}"
+        elif self.high is not None and (x >= self.high if self.high_open else x > self.high):
+            msg = f"must be {'<' if self.high_open else '<='} {self.high:g}{u}"
+        if msg:
+            raise ModelError(path, f"= {x!r}: {msg}" + (f" ({self.note})" if self.note else ""))
 
 
 def _dotted_name(path: str, value) -> str:
@@ -248,13 +255,17 @@ class Table:
             base = key[:-4] if key.endswith("_deg") else key
             f = fields.get(key) or fields.get(base)
             if key not in allowed or f is None:
-                hint = f" (angles in degrees: {key}_deg)" if f"{key}_deg" in allowed else ""
+                hint = f" (angles are given in degrees: {key}_deg)" \
+                    if f"{key}_deg" in allowed else ""
                 raise ModelError(_join(path, key), f"unknown key{hint}; allowed: "
                                  + ", ".join(allowed))
             if f.key in out:
                 raise ModelError(_join(path, key), f"{f.key} is given twice (in rad and in "
                                  "deg); give one")
-            if key.endswith("_deg") and f.type == "angle":
+            if f.degrees and f.type == "vector":
+                out[f.key] = [math.radians(d) for d in dataclasses.replace(
+                    f, unit="deg", low=None, high=None).read(_join(path, key), val)]
+            elif key.endswith("_deg") and f.type == "angle":
                 deg = v.number(_join(path, key), val, "deg")
                 rad = math.radians(deg)
                 try:
@@ -273,8 +284,7 @@ class Table:
                 continue
             if f.required:
                 key = f"{f.key}_deg" if f.degrees else f.key
-                raise ModelError(_join(path, key), "missing: required key"
-                                 + (f" ({f.unit})" if f.unit else ""))
+                raise ModelError(_join(path, key), f"missing: required key ({f.hint})")
             if f.default is not None:
                 out[f.key] = _fresh(f.default)
         return out

@@ -149,19 +149,6 @@ __all__ = ["MODEL_TYPES", "load", "loads"]
 
 MODEL_TYPES, STAGE_TYPES = fs.MODEL_TYPES, fs.STAGE_TYPES
 
-# Keys of each table: key -> (required, what it is), from the schema (file_schema.py). The
-# hint is shown for missing keys.
-_MODEL_KEYS = fs.keys(fs.MODEL)
-_GEAR_KEYS = fs.keys(fs.GEAR)
-_BODY_KEYS = fs.keys(fs.BODY)
-_CARRIER_KEYS = fs.keys(fs.CARRIER)
-_SHAFT_KEYS = fs.keys(fs.SHAFT)
-_SUPPORT_KEYS = fs.keys(fs.SUPPORT)
-_PLANETARY_KEYS = fs.keys(fs.PLANETARY)
-_PARALLEL_KEYS = fs.keys(fs.PARALLEL)
-_GEAR_PAIR_KEYS = fs.keys(fs.GEAR_PAIR)
-_LIN_PARKER_KEYS = fs.keys(fs.LIN_PARKER)
-_MESH_KEYS = fs.keys(fs.PER_MESH)
 _SECTIONS = fs.SECTIONS
 
 
@@ -303,76 +290,27 @@ def _join(path: str, key: str) -> str:
     return f"{path}{key}" if key.startswith("[") else f"{path}.{key}"
 
 
-_RANGE = re.compile(r"\[([-+0-9.eE]+), ([-+0-9.eE]+)([)\]]) rad")
-
-
-def _degree_message(msg: str, deg: float) -> str:
-    """Restate a radian range message from the API in the degrees the TOML gave."""
-    rest = re.sub(r"^= \S+ rad: ", "", msg)
-    rest = re.sub(r" \(angles are in radians;.*\)$", "", rest)
-    rest = _RANGE.sub(lambda m: f"[{math.degrees(float(m.group(1))):.6g}, "
-                                f"{math.degrees(float(m.group(2))):.6g}{m.group(3)} deg", rest)
-    return f"= {deg!r} deg: {rest}"
-
-
 @contextmanager
-def _at(path: str, renames=(), degrees=None, words=()):
-    """Re-raise a builder's or component's ModelError with its field as a TOML path.
-
-    ``renames`` are ``(regex, replacement)`` pairs applied in turn to the API field name;
-    ``degrees`` maps a renamed radian field to ``(TOML key, value in degrees)``; ``words`` are
-    ``(API word, TOML key)`` pairs replaced in the message.
-    """
+def _at(path: str, renames=()):
+    """Re-raise a builder's or component's ModelError with its field as a TOML path:
+    ``renames`` are ``(regex, replacement)`` pairs applied in turn to the API field name (the
+    message is the builder's own)."""
     try:
         yield
     except ModelError as e:
         if getattr(e, "_toml_path", False):
             raise
-        field, msg = e.field, _message(e)
+        field = e.field
         for pattern, repl in renames:
             field = re.sub(pattern, repl, field)
-        if degrees and field in degrees:
-            field, deg = degrees[field]
-            msg = _degree_message(msg, deg)
-        for word, key in words:
-            msg = re.sub(rf"\b{word}\b", key, msg)
-        raise _err(_join(path, field), msg) from None
-
-
-# -- shape checks ---------------------------------------------------------------------------
-def _table(path: str, value, keys: dict, what: str = "table") -> dict:
-    """Check that ``value`` is a table with only ``keys`` and all required ones."""
-    if not isinstance(value, dict):
-        raise _err(path, f"expected a {what}, got {type(value).__name__} {value!r}")
-    for key in value:
-        if key not in keys:
-            hint = ""
-            if f"{key}_deg" in keys:
-                hint = f" (angles are given in degrees: {key}_deg)"
-            raise _err(_join(path, key), f"unknown key{hint}; allowed: " + ", ".join(keys))
-    for key, (required, unit) in keys.items():
-        if required and key not in value:
-            raise _err(_join(path, key), f"missing: required key ({unit})")
-    return value
-
-
-def _degrees(path: str, value) -> tuple[float, float]:
-    """(degrees, radians) of an angle given in degrees."""
-    with _at("", ()):
-        deg = v.number(path, value, "deg")
-    return deg, math.radians(deg)
+        raise _err(_join(path, field), _message(e)) from None
 
 
 def _support(path: str, value):
-    """A support: a number (N/m) or a table of direction tables; checks the shape only."""
+    """A support: a number (N/m) or a table checked by its schema (``fs.SUPPORT``); returned as
+    given, for the builder."""
     if isinstance(value, dict):
-        _table(path, value, _SUPPORT_KEYS)
-        for key, sub in value.items():
-            if key in ("clearance_shape", "facets", "ramps"):
-                continue
-            if not isinstance(sub, dict):
-                raise _err(_join(path, key), "expected a table keyed by direction (x, y, z, "
-                                             f"rx, ry, theta), got {type(sub).__name__} {sub!r}")
+        fs.SUPPORT.read(path, value)
         return {k: (dict(s) if isinstance(s, dict) else s) for k, s in value.items()}
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise _err(path, "expected a stiffness in N/m or a table with stiffness, damping and "
@@ -381,31 +319,23 @@ def _support(path: str, value):
 
 
 # -- components -----------------------------------------------------------------------------
+# Each table's keys and values are checked by its schema (file_schema.py) in the file's own
+# terms (degrees, TOML paths); the builders then check only what spans several keys, and
+# their errors are re-addressed by field name (``_at``), never by rewriting their text.
 def _gear(path: str, value, name: str, internal: bool = False) -> Gear:
-    t = _table(path, value, _GEAR_KEYS)
-    pa_deg, pa = _degrees(_join(path, "pressure_angle_deg"), t["pressure_angle_deg"])
-    hx_deg, hx = _degrees(_join(path, "helix_angle_deg"), t.get("helix_angle_deg", 0.0))
-    degrees = {"pressure_angle": ("pressure_angle_deg", pa_deg),
-               "helix_angle": ("helix_angle_deg", hx_deg)}
-    with _at(path, [(rf"^{name}(\.|$)", "")], degrees):
-        return Gear(t["teeth"], t["module"], pa, hx, t.get("face_width"), internal, name=name,
-                    mass=t["mass"], inertia=t["inertia"],
-                    inertia_diametral=t.get("inertia_diametral"))
+    t = fs.GEAR.read(path, value)
+    with _at(path, [(rf"^{name}(\.|$)", "")]):
+        return Gear(t["teeth"], t["module"], t["pressure_angle"], t["helix_angle"],
+                    t.get("face_width"), internal, name=name, mass=t["mass"],
+                    inertia=t["inertia"], inertia_diametral=t.get("inertia_diametral"))
 
 
 def _body(path: str, value, name: str, default_dofs: str) -> RigidBody:
-    t = _table(path, value, _BODY_KEYS)
+    t = fs.BODY.read(path, value)
     with _at(path, [(rf"^{name}(\.|$)", "")]):
         return RigidBody(name=name, mass=t["mass"], inertia=t["inertia"],
                          inertia_diametral=t.get("inertia_diametral"),
                          dofs=t.get("dofs", default_dofs))
-
-
-def _angles(path: str, value) -> list[float]:
-    if not isinstance(value, list):
-        raise _err(path, f"expected a list of angles in deg, got {type(value).__name__} "
-                         f"{value!r}")
-    return [_degrees(f"{path}[{i}]", a)[1] for i, a in enumerate(value)]
 
 
 def _mesh_renames(table: bool) -> list:
@@ -422,64 +352,70 @@ def _stage_type(path: str, t: dict, expected: str | None) -> None:
         raise _err(_join(path, "type"), f"= {t['type']!r}: this table is a {expected} stage")
 
 
+def _stage_table(table, path: str, value, in_drivetrain: bool) -> dict:
+    """A stage table checked by its schema; ``name`` and ``coupling_stiffness`` only in a
+    drivetrain's ``[[stages]]``."""
+    if not in_drivetrain and isinstance(value, dict):
+        for key in ("name", "coupling_stiffness"):
+            if key in value:
+                allowed = [f.file_key for f in table.fields
+                           if f.key not in ("name", "coupling_stiffness")]
+                raise _err(_join(path, key), "unknown key; allowed: " + ", ".join(allowed))
+    return table.read(path, value)
+
+
+def _per_mesh(path: str, value):
+    return fs.PER_MESH.read(path, value) if isinstance(value, dict) else value
+
+
 def _planetary(path: str, value, in_drivetrain: bool = False) -> Model:
-    keys = _PLANETARY_KEYS if in_drivetrain else {
-        k: s for k, s in _PLANETARY_KEYS.items() if k not in ("name", "coupling_stiffness")}
-    t = _table(path, value, keys)
+    t = _stage_table(fs.PLANETARY, path, value, in_drivetrain)
     _stage_type(path, t, "planetary")
-    carrier = _table(_join(path, "carrier"), t["carrier"], _CARRIER_KEYS)
+    carrier = fs.CARRIER.read(_join(path, "carrier"), t["carrier"])
     sun = _gear(_join(path, "sun"), t["sun"], "sun")
     planet = _gear(_join(path, "planet"), t["planet"], "planet")
     ring = _gear(_join(path, "ring"), t["ring"], "ring", internal=True)
-    k = t["mesh_stiffness"]
-    if isinstance(k, dict):
-        _table(_join(path, "mesh_stiffness"), k, _MESH_KEYS)
-    angles = None
-    if "planet_angles_deg" in t:
-        angles = _angles(_join(path, "planet_angles_deg"), t["planet_angles_deg"])
+    k = _per_mesh(_join(path, "mesh_stiffness"), t["mesh_stiffness"])
+    angles = t.get("planet_angles")
+    n = t["n_planets"]
+    if angles is None and ring.teeth == sun.teeth + 2 * planet.teeth \
+            and (sun.teeth + ring.teeth) % n:
+        raise _err(_join(path, "n_planets"), f"= {n}: planets cannot be equally spaced, (sun + "
+                   f"ring teeth) = {sun.teeth + ring.teeth} is not divisible by {n}; give "
+                   "planet_angles_deg")
     supports = {key: _support(_join(path, key), t[key])
                 for key in ("planet_bearing", "carrier_bearing", "sun_support", "ring_support")
                 if key in t}
     renames = [(r"^planetary_stage(\.|$)", ""), *_mesh_renames(isinstance(k, dict)),
                (r"^planet\d+_bearing(\.|$)", r"planet_bearing\1"),
                (r"^planet_angles(\[|$)", r"planet_angles_deg\1")]
-    with _at(path, renames, words=[("planet_angles", "planet_angles_deg")]):
+    with _at(path, renames):
         return builders.planetary_stage(
-            sun, planet, ring, n_planets=t.get("n_planets", 3),
-            carrier_mass=carrier["mass"], carrier_inertia=carrier["inertia"],
+            sun, planet, ring, n_planets=n, carrier_mass=carrier["mass"],
+            carrier_inertia=carrier["inertia"],
             carrier_inertia_diametral=carrier.get("inertia_diametral"),
-            mesh_stiffness=k, backlash=t.get("backlash", 0.0),
-            mesh_damping=t.get("mesh_damping", 0.0), dofs=t.get("dofs", "planar"),
-            planet_angles=angles, mesh_alternation=t.get("mesh_alternation"), **supports)
+            mesh_stiffness=k, backlash=t["backlash"], mesh_damping=t["mesh_damping"],
+            dofs=t["dofs"], planet_angles=angles, mesh_alternation=t["mesh_alternation"],
+            **supports)
 
 
 def _parallel(path: str, value, in_drivetrain: bool = False) -> Model:
-    keys = _PARALLEL_KEYS if in_drivetrain else {
-        k: s for k, s in _PARALLEL_KEYS.items() if k not in ("name", "coupling_stiffness")}
-    t = _table(path, value, keys)
+    t = _stage_table(fs.PARALLEL, path, value, in_drivetrain)
     _stage_type(path, t, "parallel")
     gear = _gear(_join(path, "gear"), t["gear"], "gear")
     pinion = _gear(_join(path, "pinion"), t["pinion"], "pinion")
-    position = t.get("position", [0.0, 0.0])
-    if not isinstance(position, list) or len(position) != 2:
-        raise _err(_join(path, "position"),
-                   f"= {position!r}: expected [x, y] in m")
-    angle = 0.0
-    if "angle_deg" in t:
-        angle = _degrees(_join(path, "angle_deg"), t["angle_deg"])[1]
     supports = {key: _support(_join(path, key), t[key])
                 for key in ("gear_bearing", "pinion_bearing") if key in t}
     renames = [(r"^parallel_stage(\.|$)", ""), *_mesh_renames(False)]
     with _at(path, renames):
         return builders.parallel_stage(
-            gear, pinion, mesh_stiffness=t["mesh_stiffness"], backlash=t.get("backlash", 0.0),
-            mesh_damping=t.get("mesh_damping", 0.0), dofs=t.get("dofs", "planar"),
-            position=tuple(position), angle=angle,
-            mesh_alternation=t.get("mesh_alternation"), **supports)
+            gear, pinion, mesh_stiffness=t["mesh_stiffness"], backlash=t["backlash"],
+            mesh_damping=t["mesh_damping"], dofs=t["dofs"], position=tuple(t["position"]),
+            angle=t["angle"], mesh_alternation=t["mesh_alternation"], **supports)
 
 
 def _gear_pair(path: str, value) -> Model:
-    t = _table(path, value, _GEAR_PAIR_KEYS)
+    t = fs.GEAR_PAIR.read(path, value)
     pinion = _gear(_join(path, "pinion"), t["pinion"], "pinion")
     wheel = _gear(_join(path, "wheel"), t["wheel"], "wheel")
     bearing = _support(_join(path, "bearing"), t["bearing"]) if "bearing" in t else None
@@ -488,44 +424,37 @@ def _gear_pair(path: str, value) -> Model:
                (r"^(pinion|wheel)_bearing(\.|$)", r"bearing\2")]
     with _at(path, renames):
         return builders.gear_pair(pinion, wheel, t["mesh_stiffness"], t["backlash"],
-                                  mesh_damping=t.get("mesh_damping", 0.0),
-                                  dofs=t.get("dofs", "torsional"), bearing_stiffness=bearing,
-                                  mesh_alternation=t.get("mesh_alternation"))
+                                  mesh_damping=t["mesh_damping"], dofs=t["dofs"],
+                                  bearing_stiffness=bearing,
+                                  mesh_alternation=t["mesh_alternation"])
 
 
 def _lin_parker(path: str, value) -> Model:
-    t = _table(path, value, _LIN_PARKER_KEYS)
-    pa = t["pressure_angle_deg"]
-    pa_path = _join(path, "pressure_angle_deg")
-    degrees = {}
+    t = fs.LIN_PARKER.read(path, value)
+    pa, pa_path = t["pressure_angle_deg"], _join(path, "pressure_angle_deg")
     if isinstance(pa, dict):
-        _table(pa_path, pa, _MESH_KEYS)
-        rad = {}
-        for key, a in pa.items():
-            deg, rad[key] = _degrees(_join(pa_path, key), a)
-            degrees[f"pressure_angle.{key}"] = (f"pressure_angle_deg.{key}", deg)
-        pa_rad = rad
+        pa_rad = {k: math.radians(a) for k, a in fs.PER_MESH_ANGLE.read(pa_path, pa).items()}
     else:
-        deg, pa_rad = _degrees(pa_path, pa)
-        degrees = {f"pressure_angle.{k}": ("pressure_angle_deg", deg) for k in _MESH_KEYS}
-    angles = None
-    if "planet_angles_deg" in t:
-        angles = _angles(_join(path, "planet_angles_deg"), t["planet_angles_deg"])
+        pa_rad = math.radians(fs.PER_MESH_ANGLE.by_key()["sun_planet"].read(pa_path, pa))
+    for key, table in (("mass", fs.LIN_PARKER_BODIES), ("inertia_over_r2", fs.LIN_PARKER_BODIES),
+                       ("bearing", fs.LIN_PARKER_BODIES), ("torsional", fs.LIN_PARKER_CENTRAL),
+                       ("mesh", fs.PER_MESH)):
+        table.read(_join(path, key), t[key])  # its keys and numbers; the builder, the ranges
     renames = [(r"^lin_parker_stage(\.|$)", ""),
                (r"^(carrier|ring|sun|planet)\d*\.mass$", r"mass.\1"),
                (r"^(sun|ring)_planet\d+\.backlash$", "backlash"),
                (r"^(sun|ring)_planet\d+\.damping$", "mesh_damping"),
                (r"^planet_angles(\[|$)", r"planet_angles_deg\1")]
-    with _at(path, renames, degrees):
+    with _at(path, renames):
         return builders.lin_parker_stage(
             t["n_planets"], t["mass"], t["inertia_over_r2"], t["bearing"], t["torsional"],
-            t["mesh"], pa_rad, angles, backlash=t.get("backlash", 0.0),
-            mesh_damping=t.get("mesh_damping", 0.0))
+            t["mesh"], pa_rad, t.get("planet_angles"), backlash=t["backlash"],
+            mesh_damping=t["mesh_damping"])
 
 
 def _drivetrain(doc: dict) -> Model:
     rotor = _body("rotor", doc["rotor"], "rotor", "torsional")
-    shaft = _table("main_shaft", doc["main_shaft"], _SHAFT_KEYS)
+    shaft = fs.SHAFT.read("main_shaft", doc["main_shaft"])
     bending = _support("shaft_bending", doc["shaft_bending"]) if "shaft_bending" in doc \
         else None
     stages_doc = doc["stages"]
@@ -564,7 +493,7 @@ def _drivetrain(doc: dict) -> Model:
     if "hss_shaft" in doc:
         if generator is None:
             raise _err("hss_shaft", "given without [generator]")
-        hss = _table("hss_shaft", doc["hss_shaft"], _SHAFT_KEYS)
+        hss = fs.SHAFT.read("hss_shaft", doc["hss_shaft"])
     housing = suspension = None
     if "housing" in doc:
         housing = _body("housing", doc["housing"], "housing", "planar")
@@ -593,9 +522,8 @@ def _build(doc: dict, default_name: str | None) -> Model:
                             + " | ".join(repr(t) for t in MODEL_TYPES) + ")")
     if isinstance(doc["model"], dict) and doc["model"].get("type") == "components":
         return read_components(doc, default_name)  # what gm.dumps writes
-    meta = _table("model", doc["model"], _MODEL_KEYS)
-    with _at("", ()):
-        kind = v.choice("model.type", meta["type"], MODEL_TYPES)
+    meta = fs.MODEL.read("model", doc["model"])
+    kind = meta["type"]
     sections = _SECTIONS[kind]
     for key in doc:
         if key not in sections:
