@@ -61,7 +61,8 @@ def sections() -> list[tuple[str, str, list[Table]]]:
     return [
         ("Model files: the builder types", _BUILDER_TEXT,
          [fs.MODEL, fs.GEAR, fs.BODY, fs.CARRIER, fs.SHAFT, fs.SUPPORT, fs.PLANETARY,
-          fs.PARALLEL, fs.PER_MESH, fs.GEAR_PAIR, fs.LIN_PARKER]),
+          fs.PARALLEL, fs.PER_MESH, fs.GEAR_PAIR, fs.LIN_PARKER, fs.PER_MESH_ANGLE,
+          fs.LIN_PARKER_BODIES, fs.LIN_PARKER_CENTRAL]),
         ('Model files, component by component (type = "components")', _COMPONENT_TEXT,
          [MODEL_TABLE, Frame.SCHEMA, Gear.SCHEMA, RigidBody.SCHEMA, Body.SCHEMA, Mesh.SCHEMA,
           Bearing.SCHEMA, groups]),
