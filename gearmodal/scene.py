@@ -72,6 +72,7 @@ SCENE = Table("scene", (
     Field("speed_rpm", "number", "rpm", low=0.0,
           doc="input speed (default 0; turbine scenes: the rotor's, not this)"),
     Field("tolerance", "number", low=0.0, high=10.0, low_open=True, high_open=True,
+          note="a relative tolerance in (0, 10), e.g. 0.05",
           doc="method = \"auto\" only: relative tolerance on the study quantities "
               "(default 0.05)")),
     "The run: model, length, step, method.")
