@@ -26,7 +26,10 @@ from .modal import RPM, eigensolve
 from .model.components import Gear
 from .model.model import Model
 from .modetypes import LOOSE, QUIET, classify
+from .result_io import read_header, write_header
 
+#: layout version of :meth:`CampbellResult.save` (``result.json``)
+SAVE_VERSION = 1
 #: a tracked mode whose shape keeps less MAC than this across a near-approach has veered
 VEERING_MAC = 0.5
 #: half-width (in speed steps) of the window over which a veering's shape exchange is judged
@@ -211,7 +214,9 @@ class CampbellResult:
         return fig
 
     def save(self, directory) -> Path:
-        """Write ``campbell.csv``, ``crossings.csv``, ``mac.npz`` and ``campbell.json``."""
+        """Write ``campbell.csv``, ``crossings.csv``, ``mac.npz``, ``campbell.json``,
+        ``campbell.npz`` (the tracked arrays, exact) and ``result.json``: what :meth:`load`
+        reads back."""
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
         self.to_frame().to_csv(d / "campbell.csv", index=False)
@@ -221,7 +226,53 @@ class CampbellResult:
             {"model": self.model_name, "orders": self.orders,
              "speed_range_rpm": self.speed_range_rpm,
              "speeds_rpm": [float(x) for x in self.speeds_rpm]}, indent=2))
+        arrays = {"speeds_rpm": self.speeds_rpm, "frequencies_hz": self.frequencies_hz,
+                  "damping_ratios": self.damping_ratios, "veering": self.veering,
+                  "mode_types": np.asarray(self.mode_types, dtype=str)}
+        extra = {}
+        for key, val in self.extra.items():
+            if isinstance(val, np.ndarray):
+                arrays[f"extra.{key}"] = val
+            else:
+                extra[key] = val
+        np.savez_compressed(d / "campbell.npz", **arrays)
+        write_header(d, "CampbellResult", SAVE_VERSION, model=self.model_name,
+                     orders=self.orders, speed_range_rpm=self.speed_range_rpm,
+                     extra=_plain(extra))
         return d
+
+    @classmethod
+    def load(cls, directory) -> CampbellResult:
+        """The result :meth:`save` wrote to ``directory``, numbers exact (veerings as lists)."""
+        d = Path(directory)
+        head = read_header(d, "CampbellResult", SAVE_VERSION)
+        z = {}
+        for name in ("campbell.npz", "mac.npz"):
+            if not (d / name).is_file():
+                raise ModelError("directory", f"= {str(d)!r}: {name} is missing")
+            with np.load(d / name) as f:
+                z.update({k: f[k] for k in f.files})
+        extra = {k: (v if k != "veerings" else [tuple(r) for r in v])
+                 for k, v in head.get("extra", {}).items()}
+        extra.update({k[len("extra."):]: v for k, v in z.items() if k.startswith("extra.")})
+        rng = head.get("speed_range_rpm")
+        return cls(speeds_rpm=z["speeds_rpm"], frequencies_hz=z["frequencies_hz"],
+                   damping_ratios=z["damping_ratios"],
+                   mode_types=z["mode_types"].astype(object), macs=list(z["macs"]),
+                   veering=z["veering"], orders=dict(head["orders"]),
+                   speed_range_rpm=tuple(rng) if rng is not None else None,
+                   model_name=head["model"], extra=extra)
+
+
+def _plain(x):
+    """JSON-able copy: numpy scalars and tuples as Python numbers and lists."""
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, np.generic):
+        return x.item()
+    return x
 
 
 def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state=None,

@@ -19,8 +19,11 @@ import scipy.linalg as sla
 
 from .assembly import Assembly, as_assembly, reduction
 from .errors import ModelError
+from .result_io import read_csv, read_header, write_header
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
+#: layout version of :meth:`ModalResult.save` (``result.json``)
+SAVE_VERSION = 1
 
 
 @dataclass
@@ -99,8 +102,10 @@ class ModalResult:
         return fig
 
     def save(self, directory) -> Path:
-        """Write ``modes.csv``, ``shapes.csv``, ``kinetic_energy.csv``, ``strain_energy.csv``
-        and ``modal.json`` into ``directory``; returns the directory."""
+        """Write ``modes.csv``, ``shapes.csv`` (real, phase-aligned), ``kinetic_energy.csv``,
+        ``strain_energy.csv``, ``modal.json``, ``modal.npz`` (the complex shapes, frequencies
+        and damping ratios, exact) and ``result.json`` into ``directory``: what :meth:`load`
+        reads back. Returns the directory."""
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
         self.to_frame().to_csv(d / "modes.csv", index=False)
@@ -111,7 +116,35 @@ class ModalResult:
         (d / "modal.json").write_text(json.dumps(
             {"model": self.model_name, "speed_rpm": self.speed_rpm,
              "n_modes": self.n_modes}, indent=2))
+        arrays = {"shapes": self.shapes, "frequencies_hz": self.frequencies_hz,
+                  "damping_ratios": self.damping_ratios}
+        if self.contact_state is not None:
+            arrays["contact_state"] = np.asarray(self.contact_state, dtype=bool)
+        np.savez_compressed(d / "modal.npz", **arrays)
+        write_header(d, "ModalResult", SAVE_VERSION, dof_names=list(self.dof_names),
+                     mode_types=list(self.mode_types), model=self.model_name,
+                     speed_rpm=self.speed_rpm)
         return d
+
+    @classmethod
+    def load(cls, directory) -> ModalResult:
+        """The result :meth:`save` wrote to ``directory``, numbers exact. The static
+        ``equilibrium`` is not saved: it is ``None`` (its contact state is kept)."""
+        d = Path(directory)
+        head = read_header(d, "ModalResult", SAVE_VERSION)
+        npz = d / "modal.npz"
+        if not npz.is_file():
+            raise ModelError("directory", f"= {str(d)!r}: modal.npz is missing")
+        with np.load(npz) as z:
+            arrays = {k: z[k] for k in z.files}
+        ke = read_csv(d / "kinetic_energy.csv", index_col="mode")
+        se = read_csv(d / "strain_energy.csv", index_col="mode")
+        ke.index.name = se.index.name = None  # as modal() makes them
+        return cls(speed_rpm=head["speed_rpm"], frequencies_hz=arrays["frequencies_hz"],
+                   damping_ratios=arrays["damping_ratios"], shapes=arrays["shapes"],
+                   dof_names=list(head["dof_names"]), kinetic_energy=ke, strain_energy=se,
+                   mode_types=list(head["mode_types"]), model_name=head["model"],
+                   contact_state=arrays.get("contact_state"))
 
 
 def _real_shape(v: np.ndarray) -> np.ndarray:

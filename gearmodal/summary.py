@@ -63,12 +63,15 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
     """
     sim = getattr(result, "gearbox", result)
     f = sim.forces
-    meshes = {kind: [c[:-len(".front")] for c in f.columns
-                     if c.endswith(f"{kind}_{planet}.front")] for kind in ("sun", "ring")}
+    # the structure the builders recorded (SimulationResult.elements): the meshes of the
+    # planet named within its stage, the stage of the first one
+    meshes = {kind: [m for m in sim.meshes(f"{kind}_planet") if sim.planet_of(m) == planet]
+              for kind in ("sun", "ring")}
     if not meshes["sun"] or not meshes["ring"]:
         raise ModelError("planet", f"= {planet!r}: the result has no sun-planet and ring-planet "
                          "meshes of that planet")
-    stage = meshes["sun"][0].rsplit(".", 1)[0] + "." if "." in meshes["sun"][0] else ""
+    name = sim.stage_of(meshes["sun"][0])
+    stage = f"{name}." if name else ""
     out: dict = {}
     for kind in ("sun", "ring"):
         m = meshes[kind][0]
@@ -81,22 +84,20 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
     dc = sim.double_contact()
     # single episodes name their mesh ("stage1.ring_planet1"), simultaneous ones their stage
     # ("stage1 (several planets)", or "several planets" for a stage model)
-    name = stage[:-1]
-    single = dc[(dc.n_planets == 1)
-                & (dc.mesh.map(lambda m: m.rsplit(".", 1)[0] if "." in m else "") == name)]
+    single = dc[(dc.n_planets == 1) & (dc.mesh.map(sim.stage_of) == name)]
     multi = dc[(dc.n_planets >= 2)
                & (dc.mesh == (f"{name} (several planets)" if name else "several planets"))]
     out["double_contact_time_s"] = _union_length(zip(single.start, single.end, strict=True))
     out["double_contact_two_planets_time_s"] = _union_length(zip(multi.start, multi.end,
                                                                  strict=True))
-    bearings = sorted({c.rsplit(".", 1)[0] for c in f.columns
-                       if c.startswith(f"{stage}planet") and "_bearing." in c})
+    bearings = sorted(b for b in sim.elements_of("planet_bearing") if sim.stage_of(b) == name
+                      and f"{b}.x" in f.columns)
     radial = pd.DataFrame({b: np.hypot(f[f"{b}.x"], f[f"{b}.y"]) for b in bearings},
                           index=f.index)
     out["max_planet_bearing_force_N"] = float(radial.to_numpy().max()) if bearings else math.nan
     ls = sim.load_sharing()
     fac = ls[f"{stage}factor"] if f"{stage}factor" in ls else ls.filter(like="factor").iloc[:, 0]
-    sp = [c for c in f.columns if c.startswith(f"{stage}sun_planet") and c.endswith(".front")]
+    sp = [f"{m}.front" for m in sim.meshes("sun_planet") if sim.stage_of(m) == name]
     total = sum(f[c] - f[c[:-len("front")] + "back"] for c in sp)
     loaded = np.abs(total) >= loaded_fraction * float(np.abs(total).max())
     out["peak_load_sharing_factor"] = float(fac[loaded].max())

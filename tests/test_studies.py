@@ -168,7 +168,10 @@ def test_summarize_is_the_same_for_a_stage_inside_a_drivetrain():
         sim, forces=sim.forces.rename(columns=pre),
         contact_state=sim.contact_state.rename(columns=pre),
         events=sim.events.assign(element=sim.events.element.map(pre)),
-        initial_state={pre(k): v for k, v in sim.initial_state.items()})
+        initial_state={pre(k): v for k, v in sim.initial_state.items()},
+        # the structure as a drivetrain's builder records it
+        elements=sim.elements.rename(index=pre).assign(
+            stage="stage1", planet=[pre(x) if x else "" for x in sim.elements.planet]))
     a, b = summarize(sim), summarize(renamed)
     assert a["double_contact_two_planets_time_s"] > 0  # the check below can fail
     for key, value in a.items():

@@ -24,7 +24,7 @@ from ..errors import ModelError
 from ..model.model import Model
 from .azimuth import AzimuthAssembler
 from .driver import METHODS, Driver, Method, get_method
-from .result import EVENT_COLUMNS, SimulationResult
+from .result import ELEMENT_COLUMNS, EVENT_COLUMNS, SimulationResult
 from .system import PiecewiseLinearSystem
 
 #: pandas 3 has a string dtype of its own ("str"); pandas 2 keeps labels as objects
@@ -289,7 +289,22 @@ def build_result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings) -> S
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
     tables = _Tables(seg_systems, t, X, S, event_array([events]), mesh_k)
     return SimulationResult(t=t, settings=settings, initial_state=init, stats=stats,
-                            tables=tables)
+                            tables=tables, elements=elements_table(system.asm))
+
+
+def elements_table(asm: Assembly) -> pd.DataFrame:
+    """One row per element with contact, spring or round-clearance rows (index ``element``):
+    ``kind``, ``stage``, ``role``, ``planet`` (:attr:`SimulationResult.elements`)."""
+    rows = {}
+    for part in (asm.contacts, asm.springs, asm.round):
+        if part is None:
+            continue
+        for el, kind, st, role, pl in zip(part.element, part.kind, part.stage, part.role,
+                                          part.planet, strict=True):
+            rows.setdefault(el, (kind, st, role, pl))
+    out = pd.DataFrame(list(rows.values()), index=pd.Index(list(rows), name="element"),
+                       columns=ELEMENT_COLUMNS, dtype=object)
+    return out.astype(str)
 
 
 class _Tables:

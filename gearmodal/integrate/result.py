@@ -11,17 +11,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..result_io import read_csv, read_header, write_header
+
 EVENT_COLUMNS = ["time", "element", "contact", "state_before", "state_after", "gap_rate",
                  "force_after"]
 
 
-def _planet_of(element: str) -> str:
-    m = re.search(r"(planet\d+)", element)
-    return m.group(1) if m else ""
-
-
-def _stage_of(element: str) -> str:
-    return element.rsplit(".", 1)[0] if "." in element else ""
+#: columns of :attr:`SimulationResult.elements`
+ELEMENT_COLUMNS = ["kind", "stage", "role", "planet"]
+#: layout version of :meth:`SimulationResult.save` (``result.json``)
+SAVE_VERSION = 1
 
 
 def _table(name: str, doc: str) -> property:
@@ -76,6 +75,11 @@ class SimulationResult:
     constraint_residual : coupled systems only: the exact residual ``g`` of every constraint
         row along the trajectory (m or rad; rounding for linear constraints, second order for
         linearised joints).
+    elements : the model's structure, one row per element with contact or spring rows
+        (index ``element``): ``kind`` (``mesh``, ``bearing``, ``spring``, ``round``...),
+        ``stage``, ``role`` (``sun_planet``, ``planet_bearing``...) and ``planet`` (the
+        planet's body name, ``""`` if none), as the builders set them; the double-contact and
+        load-sharing analyses read it.
 
     The five tables (``q``, ``v``, ``forces``, ``events``, ``contact_state``) are built from
     the run's arrays when first read and then kept, so a study that reads only the event log
@@ -96,6 +100,7 @@ class SimulationResult:
     stats: dict = field(default_factory=dict)
     constraint_forces: pd.DataFrame | None = None
     constraint_residual: pd.DataFrame | None = None
+    elements: pd.DataFrame | None = None
     #: ``tables(name) -> DataFrame`` builds the tables not given (see the class docstring)
     tables: object = field(default=None, repr=False, compare=False)
 
@@ -121,6 +126,44 @@ class SimulationResult:
         return (f"SimulationResult({len(self.t)} times to {self.t[-1]:.6g} s, "
                 f"{self.stats.get('n_events', '?')} events, "
                 f"method={self.settings.get('method', '?')!r})")
+
+    # -- structure -----------------------------------------------------------------------
+    def meshes(self, role: str | None = None) -> list[str]:
+        """Names of the meshes (of ``role``, e.g. ``"sun_planet"``), in model order."""
+        el = self.elements
+        if el is None:  # a result saved before the structure was kept: the builders' names
+            names = [c[:-len(".front")] for c in self.forces.columns if c.endswith(".front")]
+            return [n for n in names if role is None
+                    or re.search(rf"(^|\.){role}\d*$", n)]
+        sel = el[el.kind == "mesh"]
+        if role is not None:
+            sel = sel[sel.role == role]
+        return list(sel.index)
+
+    def elements_of(self, role: str) -> list[str]:
+        """Names of the elements of ``role`` (``"planet_bearing"``...), in model order."""
+        el = self.elements
+        if el is None:  # built before the structure was kept: the builders' names
+            pattern = r"planet\d+_bearing" if role == "planet_bearing" else rf"{role}\d*"
+            names = dict.fromkeys(c.rsplit(".", 1)[0] for c in self.forces.columns)
+            return [n for n in names if re.search(rf"(^|\.){pattern}$", n)]
+        return list(el.index[el.role == role])
+
+    def stage_of(self, element: str) -> str:
+        """The stage of ``element`` (``"stage1"``; ``""`` outside stages)."""
+        el = self.elements
+        if el is None or element not in el.index:
+            return element.rsplit(".", 1)[0] if "." in element else ""
+        return str(el.at[element, "stage"])
+
+    def planet_of(self, element: str) -> str:
+        """The planet of ``element`` named within its stage (``"planet1"``), ``""`` if none."""
+        el = self.elements
+        if el is None or element not in el.index:
+            m = re.search(r"(planet\d+)", element)
+            return m.group(1) if m else ""
+        planet, stage = str(el.at[element, "planet"]), str(el.at[element, "stage"])
+        return planet[len(stage) + 1:] if stage and planet.startswith(stage + ".") else planet
 
     # -- contact intervals ---------------------------------------------------------------
     def _intervals(self) -> dict[str, list[tuple[float, float]]]:
@@ -155,7 +198,7 @@ class SimulationResult:
                 for b0, b1 in iv.get(f"{m}:back", []):
                     s, e = max(a0, b0), min(a1, b1)
                     if e > s:
-                        rows.append((s, e, e - s, m, _planet_of(m), 1))
+                        rows.append((s, e, e - s, m, self.planet_of(m), 1))
         single = pd.DataFrame(rows, columns=["start", "end", "duration", "mesh", "planet",
                                              "n_planets"]).sort_values("start",
                                                                        ignore_index=True)
@@ -164,7 +207,8 @@ class SimulationResult:
         by_stage: dict[str, list] = {}
         for r in single.itertuples(index=False):
             if r.planet:
-                by_stage.setdefault(_stage_of(r.mesh), []).append((r.start, r.end, r.planet))
+                by_stage.setdefault(self.stage_of(r.mesh), []).append((r.start, r.end,
+                                                                        r.planet))
         for stage, eps in by_stage.items():
             label = f"{stage} (several planets)" if stage else "several planets"
             marks = sorted({x for s, e, _ in eps for x in (s, e)})
@@ -192,13 +236,13 @@ class SimulationResult:
         ``<stage>.factor`` = N * the largest share (1 = equal sharing).
         ``result.attrs["peak_factor"]`` holds the peak factor of each stage.
         """
-        cols = [c for c in self.forces.columns if re.search(r"sun_planet\d+\.front$", c)]
+        cols = [f"{m}.front" for m in self.meshes("sun_planet")]
         out = pd.DataFrame(index=self.forces.index)
         peaks = {}
         by_stage: dict[str, list] = {}
         for c in cols:
             mesh = c[: -len(".front")]
-            by_stage.setdefault(_stage_of(mesh), []).append(mesh)
+            by_stage.setdefault(self.stage_of(mesh), []).append(mesh)
         for stage, meshes in by_stage.items():
             net = np.column_stack([self.forces[f"{m}.front"] - self.forces[f"{m}.back"]
                                    for m in meshes])
@@ -209,7 +253,7 @@ class SimulationResult:
                 share = np.where(loaded, net / np.where(loaded, tot, 1.0), np.nan)
             prefix = f"{stage}." if stage else ""
             for i, m in enumerate(meshes):
-                out[f"{prefix}{_planet_of(m)}"] = share[:, i]
+                out[f"{prefix}{self.planet_of(m)}"] = share[:, i]
             with np.errstate(invalid="ignore"):
                 valid = np.isfinite(share).any(axis=1)
                 factor = np.full(len(share), np.nan)
@@ -254,21 +298,60 @@ class SimulationResult:
         return fig
 
     def save(self, directory) -> Path:
-        """Write ``q.csv``, ``v.csv``, ``forces.csv``, ``events.csv``, ``settings.json`` and,
-        for coupled systems, ``constraint_forces.csv`` and ``constraint_residual.csv``."""
+        """Write ``q.csv``, ``v.csv``, ``forces.csv``, ``events.csv``, ``contact_state.csv``,
+        ``elements.csv``, ``settings.json`` (settings and ``stats``), ``result.json`` (layout
+        version, initial state) and, for coupled systems, ``constraint_forces.csv`` and
+        ``constraint_residual.csv``: what :meth:`load` reads back."""
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
         self.q.to_csv(d / "q.csv", index_label="time")
         self.v.to_csv(d / "v.csv", index_label="time")
         self.forces.to_csv(d / "forces.csv", index_label="time")
         self.events.to_csv(d / "events.csv", index=False)
+        self.contact_state.to_csv(d / "contact_state.csv", index_label="time")
+        if self.elements is not None:
+            self.elements.to_csv(d / "elements.csv", index_label="element")
         if self.constraint_forces is not None:
             self.constraint_forces.to_csv(d / "constraint_forces.csv", index_label="time")
         if self.constraint_residual is not None:
             self.constraint_residual.to_csv(d / "constraint_residual.csv", index_label="time")
         (d / "settings.json").write_text(json.dumps(
             {**self.settings, "stats": self.stats}, indent=2, default=str))
+        write_header(d, "SimulationResult", SAVE_VERSION, initial_state=self.initial_state,
+                     constraints=self.constraint_forces is not None)
         return d
+
+    @classmethod
+    def load(cls, directory) -> SimulationResult:
+        """The result :meth:`save` wrote to ``directory``: every table and number as it was
+        (floats exact); ``settings`` as JSON holds them (values JSON cannot hold come back as
+        their text). A directory of an older layout is refused naming it."""
+        d = Path(directory)
+        head = read_header(d, "SimulationResult", SAVE_VERSION)
+
+        def table(name):
+            return read_csv(d / f"{name}.csv", index_col="time")
+
+        q, v, forces = table("q"), table("v"), table("forces")
+        state = table("contact_state").astype(bool)
+        ev = read_csv(d / "events.csv", dtype={c: str for c in
+                                               ("element", "contact", "state_before",
+                                                "state_after")})
+        ev = ev.astype({"time": float, "gap_rate": float, "force_after": float})
+        elements = None
+        if (d / "elements.csv").exists():
+            elements = read_csv(d / "elements.csv", index_col="element", dtype=str,
+                                keep_default_na=False)
+        extra = {}
+        if head.get("constraints"):
+            extra = {"constraint_forces": table("constraint_forces"),
+                     "constraint_residual": table("constraint_residual")}
+        meta = json.loads((d / "settings.json").read_text())
+        stats = meta.pop("stats", {})
+        return cls(t=q.index.to_numpy(dtype=float), q=q, v=v, forces=forces, events=ev,
+                   contact_state=state, settings=meta,
+                   initial_state={k: bool(x) for k, x in head["initial_state"].items()},
+                   stats=stats, elements=elements, **extra)
 
 
 for _name, _doc in (
