@@ -37,13 +37,13 @@ The ladder refines the numerical settings only; the model's own fidelity (cleara
 DOF level) is the scene's choice.
 
 Resume: with ``store=DIR`` every rung's settings, CPU time and summary are written to
-``DIR/rung<l>.json`` as it finishes (atomically), under the scene's fingerprint (SHA-256 of
-the scene's canonical text, ``DIR/auto_store.json``). Started again on the same scene and store, the
-ladder loads the finished rungs and runs only the others; a different scene (or a different
-``coarsest``) is refused. The store keeps summaries, not time series: when the chosen rung was
-loaded, it is run once more to return its result (the runs are deterministic, so that result
-is the stored rung's; a re-run whose quantities differ from the stored ones, e.g. after an
-upgrade changed the integrator, raises naming ``store``).
+``DIR/rung<l>.json`` as it finishes (atomically), its result to ``DIR/rung<l>/``
+(``result.save``; only the last three rungs', which can still be chosen), under the scene's
+fingerprint (SHA-256 of the scene's canonical text, ``DIR/auto_store.json``). Started again on
+the same scene and store, the ladder loads the finished rungs and runs only the others; a
+different scene (or a different ``coarsest``) is refused, as is a store of an older layout.
+The chosen rung's result is loaded from the store (``load``); a stored summary that its result
+no longer reproduces raises naming ``store``.
 """
 
 from __future__ import annotations
@@ -52,6 +52,7 @@ import copy
 import json
 import math
 import os
+import shutil
 import time
 import uuid
 from dataclasses import dataclass, field
@@ -61,6 +62,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import ModelError
+from .saved import load_run
 from .summary import summarize
 
 #: the quantities of the paper's double-contact study compared between rungs
@@ -166,11 +168,30 @@ class _Store:
             return None  # a guard (scene and coarsest, in the identity, pin them): rerun
         return d
 
-    def save(self, level: int, settings: dict, cpu: float, summary: dict) -> None:
+    def save(self, level: int, settings: dict, cpu: float, summary: dict,
+             result=None) -> None:
+        """Store a finished rung: its result first (``rung<l>/``, renamed into place), then
+        its summary (``rung<l>.json``, which marks the rung done)."""
+        if result is not None:
+            tmp = self.dir / f".rung{level}-{uuid.uuid4().hex[:8]}"
+            result.save(tmp)
+            final = self.dir / f"rung{level}"
+            if final.exists():
+                shutil.rmtree(final)
+            os.rename(tmp, final)
         clean = {k: (float(v) if isinstance(v, (int, float, np.floating, np.integer))
                      else None) for k, v in summary.items()}
         self._write(self.dir / f"rung{level}.json",
                     {"settings": settings, "cpu_s": cpu, "summary": clean})
+
+    def result(self, level: int):
+        """The stored result of a rung, or None."""
+        path = self.dir / f"rung{level}"
+        return load_run(path) if path.is_dir() else None
+
+    def drop(self, level: int) -> None:
+        """Forget a rung's result (it can no longer be chosen); its summary stays."""
+        shutil.rmtree(self.dir / f"rung{level}", ignore_errors=True)
 
 
 def _rung_scene(scene, settings: dict):
@@ -298,11 +319,13 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
             cpu = time.process_time() - t0
             summ = summarize(res)
             if disk is not None:
-                disk.save(level, st, cpu, summ)
+                disk.save(level, st, cpu, summ, res)
         results.append(res)
         summaries.append(summ)
         if not keep_all and level >= 3:
             results[level - 3] = None  # only the last three rungs can still be chosen
+            if disk is not None:
+                disk.drop(level - 3)
         rows.append({"rung": level, **st, "cpu_s": cpu, "n_events": summ.get("n_events"),
                      **{q: summ.get(q, math.nan) for q in quantities},
                      "cached": got is not None})
@@ -325,8 +348,10 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     settings = {k: v for k, v in rows[chosen].items() if k in base} if chosen is not None \
         else {}
     result = results[chosen] if chosen is not None else None
-    if chosen is not None and result is None:  # loaded from the store: run it again
-        result = _rung_scene(scene, settings).simulate()
+    if chosen is not None and result is None:  # loaded from the store: its saved result
+        result = disk.result(chosen) if disk is not None else None
+        if result is None:  # a store without it: run it again
+            result = _rung_scene(scene, settings).simulate()
         again = summarize(result)
         if difference(again, summaries[chosen], quantities) > 1e-12:
             raise ModelError("store", f"= {str(store)!r}: rung {chosen} run again differs "

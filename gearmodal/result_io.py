@@ -21,27 +21,28 @@ __all__ = ["read_csv", "read_header", "write_header"]
 HEADER = "result.json"
 
 
-def write_header(directory: Path, kind: str, version: int, **data) -> None:
-    """Write the directory's header: the result kind, its layout version and ``data``
-    (JSON-able)."""
-    (Path(directory) / HEADER).write_text(json.dumps(
+def write_header(directory: Path, kind: str, version: int, header: str = HEADER,
+                 **data) -> None:
+    """Write the directory's header (``header``, default ``result.json``): the result kind,
+    its layout version and ``data`` (JSON-able)."""
+    (Path(directory) / header).write_text(json.dumps(
         {"format": kind, "version": version, **data}, indent=1, default=str))
 
 
-def read_header(directory, kind: str, version: int) -> dict:
-    """The header of a result directory written by ``kind``'s ``save`` at ``version``;
-    :class:`ModelError` naming the directory otherwise."""
+def read_header(directory, kind: str, version: int, header: str = HEADER) -> dict:
+    """The header (``header``) of a result directory written by ``kind``'s ``save`` at
+    ``version``; :class:`ModelError` naming the directory otherwise."""
     d = Path(directory)
     if not d.is_dir():
         raise ModelError("directory", f"= {str(d)!r}: no such result directory")
-    p = d / HEADER
+    p = d / header
     if not p.is_file():
-        raise ModelError("directory", f"= {str(d)!r}: no {HEADER}; not a saved {kind}, or "
+        raise ModelError("directory", f"= {str(d)!r}: no {header}; not a saved {kind}, or "
                          "saved by an older gearmodal (run it again)")
     try:
         head = json.loads(p.read_text())
     except (OSError, ValueError) as e:
-        raise ModelError("directory", f"= {str(d)!r}: unreadable {HEADER} ({e})") from None
+        raise ModelError("directory", f"= {str(d)!r}: unreadable {header} ({e})") from None
     if head.get("format") != kind:
         raise ModelError("directory", f"= {str(d)!r} holds a {head.get('format')!r}, not a "
                          f"{kind}")

@@ -36,7 +36,7 @@ import pandas as pd
 from .errors import ModelError
 from .summary import summarize
 
-__all__ = ["load_table", "summarize", "sweep"]
+__all__ = ["load_result", "load_table", "summarize", "sweep"]
 
 # -- cases --------------------------------------------------------------------------------------
 def _cases(parameters) -> tuple[list, list[dict]]:
@@ -129,8 +129,10 @@ def _scene_identity(scene) -> dict:
     return {"scene": str(p.resolve()), "scene_sha256": load_scene(p).identity()}
 
 
-def _run_case(scene, case: dict, metrics: Callable, blas_threads: int | None) -> tuple:
-    """Run one case in a worker: (row, tables, cpu_s)."""
+def _run_case(scene, case: dict, metrics: Callable, blas_threads: int | None,
+              save_to: str | None = None) -> tuple:
+    """Run one case in a worker: (row, tables, cpu_s); with ``save_to`` the result is also
+    saved there (``result.save``)."""
     from contextlib import nullcontext
 
     try:
@@ -148,11 +150,16 @@ def _run_case(scene, case: dict, metrics: Callable, blas_threads: int | None) ->
             result = load_scene(scene, overrides=case).simulate()
         row = dict(metrics(result))
     tables = row.pop("tables", {}) or {}
-    return row, tables, time.process_time() - t0
+    cpu = time.process_time() - t0
+    if save_to is not None:
+        result.save(save_to)
+    return row, tables, cpu
 
 
-def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict) -> None:
-    """Write a case atomically: a temporary directory renamed into place when complete."""
+def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict,
+                result_dir: Path | None = None) -> None:
+    """Write a case atomically: a temporary directory renamed into place when complete (with
+    the saved result moved in as ``result/``)."""
     final = root / cid
     tmp = root / f".tmp-{cid}-{uuid.uuid4().hex[:8]}"
     tmp.mkdir(parents=True)
@@ -162,6 +169,8 @@ def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict) -> No
         frame.to_parquet(tmp / "row.parquet")
         for name, df in tables.items():
             df.to_parquet(tmp / f"{name}.parquet")
+        if result_dir is not None:
+            os.rename(result_dir, tmp / "result")
         try:
             os.rename(tmp, final)
         except OSError:
@@ -171,6 +180,19 @@ def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict) -> No
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def load_result(store, case_id: str):
+    """The result a case of a sweep run with ``keep_results=True`` saved: a
+    :class:`~gearmodal.SimulationResult` or, for a turbine scene, a
+    :class:`~gearmodal.turbine.DrivetrainResult` (their ``load``), by ``case_id``."""
+    path = Path(store) / "cases" / str(case_id) / "result"
+    if not path.is_dir():
+        raise ModelError("case_id", f"= {case_id!r}: no saved result in {str(store)!r} (run "
+                         "the sweep with keep_results=True)")
+    from .saved import load_run
+
+    return load_run(path)
 
 
 def load_table(store, case_id: str, name: str) -> pd.DataFrame:
@@ -188,7 +210,8 @@ def load_table(store, case_id: str, name: str) -> pd.DataFrame:
 # -- the sweep ----------------------------------------------------------------------------------
 def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
           metrics: Callable | None = None, progress: bool = True, max_workers: int | None = None,
-          blas_threads: int | None = 1, errors: str = "raise") -> pd.DataFrame:
+          blas_threads: int | None = 1, errors: str = "raise",
+          keep_results: bool = False) -> pd.DataFrame:
     """Run every case of a parameter study and return one row per case.
 
     Parameters
@@ -217,6 +240,9 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         running have finished and been stored; pending ones are dropped) or ``"record"`` (the
         message goes into the ``error`` column and the case is not stored, so a resume
         retries it).
+    keep_results : also keep each case's whole result in the store (``result.save``; read it
+        back with :func:`load_result`). Off by default: a 30 s turbine run is ~100 MB of CSV.
+        Needs a ``store`` on a file system the workers share.
 
     Returns
     -------
@@ -228,6 +254,8 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         raise ModelError("max_workers", f"= {max_workers!r}: must be an integer >= 1")
     if errors not in ("raise", "record"):
         raise ModelError("errors", f"= {errors!r}: must be 'raise' or 'record'")
+    if keep_results and store is None:
+        raise ModelError("keep_results", "= True needs a store to keep the results in")
     metrics = summarize if metrics is None else metrics
     labels, cases = _cases(parameters)
     ids = [_case_id(c) for c in cases]
@@ -275,8 +303,10 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         executor = cf.ProcessPoolExecutor(max_workers=min(max_workers or os.cpu_count() or 1,
                                                           len(todo)))
     try:
-        futures = {executor.submit(_run_case, scene, c, metrics, blas_threads): (cid, c)
-                   for cid, c in todo}
+        saves = {cid: (str(root / f".res-{cid}-{uuid.uuid4().hex[:8]}") if keep_results
+                       else None) for cid, _ in todo}
+        futures = {executor.submit(_run_case, scene, c, metrics, blas_threads, saves[cid]):
+                   (cid, c) for cid, c in todo}
         for fut in cf.as_completed(futures):
             cid, c = futures[fut]
             try:
@@ -293,13 +323,16 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
                             fid, fc = futures[f]
                             if not (root / fid).exists():
                                 r, t, cpu_f = f.result()
-                                _write_case(root, fid, fc, {**r, "cpu_s": cpu_f}, t)
+                                _write_case(root, fid, fc, {**r, "cpu_s": cpu_f}, t,
+                                            _saved(saves[fid]))
                     raise
                 rows[cid] = {"error": f"{type(err).__name__}: {err}", "cached": False}
+                if saves[cid] is not None:
+                    shutil.rmtree(saves[cid], ignore_errors=True)
             else:
                 row["cpu_s"] = cpu
                 if root is not None:
-                    _write_case(root, cid, c, row, tables)
+                    _write_case(root, cid, c, row, tables, _saved(saves[cid]))
                 rows[cid] = {**row, "case_id": cid, "cached": False}
             bar.update(1)
     finally:
@@ -313,3 +346,7 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         out.index.name = parameters.index.name
     out.attrs["store"] = str(store) if store is not None else None
     return out
+
+
+def _saved(path: str | None) -> Path | None:
+    return Path(path) if path is not None and Path(path).is_dir() else None

@@ -88,3 +88,57 @@ def test_an_older_or_foreign_directory_is_refused_by_name(sim, tmp_path):
     (tmp_path / "run" / "result.json").unlink()  # what a save before this version left
     with pytest.raises(gm.ModelError, match=r"no result\.json; .*older gearmodal"):
         gm.SimulationResult.load(tmp_path / "run")
+
+
+def test_a_turbine_run_loads_back_exactly(tmp_path):
+    from gearmodal.summary import summarize
+    from gearmodal.turbine import DrivetrainResult
+
+    run = load_scene("studies/scenes/600kw_turbine_10ms.toml", {"scene.t_end": 0.04}).simulate()
+    run.save(tmp_path)
+    again = DrivetrainResult.load(tmp_path)
+    _same_frame(run.turbine.loads, again.turbine.loads)
+    for name in ("q", "v", "forces", "events", "contact_state", "elements"):
+        _same_frame(getattr(run.gearbox, name), getattr(again.gearbox, name))
+    assert (again.stats, again.cut_in_time) == (run.stats, run.cut_in_time)
+    assert summarize(again) == summarize(run)
+
+
+def test_a_sweep_keeps_whole_results_when_asked(tmp_path):
+    from gearmodal.studies import load_result
+    from gearmodal.summary import summarize
+
+    rows = gm.sweep(STAGE, {"scene.t_end": [0.002, 0.003]}, store=tmp_path, progress=False,
+                    max_workers=1, keep_results=True)
+    for cid in rows.case_id:
+        res = load_result(tmp_path, cid)
+        row = rows.set_index("case_id").loc[cid]
+        assert summarize(res)["n_events"] == row["n_events"]
+        assert res.t[-1] == pytest.approx(row["scene.t_end"], abs=1e-12)
+    assert not list(tmp_path.glob("cases/.res-*"))  # moved into the cases, none left over
+    with pytest.raises(gm.ModelError, match="keep_results = True needs a store"):
+        gm.sweep(STAGE, {"scene.t_end": [0.002]}, keep_results=True, progress=False)
+    plain = gm.sweep(STAGE, {"scene.t_end": [0.002]}, store=tmp_path / "plain", progress=False,
+                     max_workers=1)
+    with pytest.raises(gm.ModelError, match="keep_results=True"):
+        load_result(tmp_path / "plain", plain.case_id.iloc[0])
+
+
+def test_the_fidelity_ladder_returns_the_stored_rung_without_running_it(tmp_path,
+                                                                        monkeypatch):
+    import gearmodal.auto as auto
+
+    sc = load_scene(STAGE, {"scene.t_end": 0.004})
+    first = gm.choose_fidelity(sc, 0.05, store=tmp_path)
+    assert first.met
+    kept = sorted(p.name for p in tmp_path.iterdir() if p.is_dir())
+    assert f"rung{first.rung}" in kept and len(kept) <= 3
+
+    def no_run(*a, **k):
+        raise AssertionError("a stored rung was run again")
+
+    monkeypatch.setattr(auto, "_rung_scene", no_run)
+    again = gm.choose_fidelity(sc, 0.05, store=tmp_path)
+    assert again.table.cached.all() and again.rung == first.rung
+    _same_frame(again.result.forces, first.result.forces)
+    _same_frame(again.result.events, first.result.events)

@@ -61,10 +61,14 @@ from ..errors import ModelError
 from ..integrate import Driver, SimulationResult, build_result, get_method, mesh_stiffness
 from ..integrate.azimuth import AzimuthAssembler
 from ..integrate.system import PiecewiseLinearSystem
+from ..result_io import read_header, write_header
 from ..static import equilibrium
 from .rotor import LOAD_COLUMNS
 from .turbine import RPM, TURBINE_COLUMNS, Turbine, TurbineResult, mark_cut_in
 from .wind import Wind
+
+#: layout version of :meth:`DrivetrainResult.save` (``drivetrain.json``)
+SAVE_VERSION = 1
 
 HOLDS = ("interpolate", "hold", "linear")
 #: time (s) over which a re-based reference speed takes up the drivetrain's rigid rotation
@@ -115,12 +119,22 @@ class DrivetrainResult:
 
     def save(self, directory) -> Path:
         """Write the turbine loads (``turbine_loads.csv``, ``turbine.json``), the gearbox results
-        (``forces.csv``, ``events.csv``, ``q.csv``, ``v.csv``, ``settings.json``) and
-        ``stats.json``."""
+        (``forces.csv``, ``events.csv``, ``q.csv``, ``v.csv``, ``settings.json``...: as
+        :meth:`SimulationResult.save`) and ``stats.json``: what :meth:`load` reads back."""
         d = self.turbine.save(directory)
         self.gearbox.save(d)
         (d / "stats.json").write_text(json.dumps(self.stats, indent=2))
+        write_header(d, "DrivetrainResult", SAVE_VERSION, header="drivetrain.json")
         return d
+
+    @classmethod
+    def load(cls, directory) -> DrivetrainResult:
+        """The run :meth:`save` wrote to ``directory``: turbine loads and the gearbox result,
+        floats exact; an older layout is refused naming the directory."""
+        d = Path(directory)
+        read_header(d, "DrivetrainResult", SAVE_VERSION, header="drivetrain.json")
+        return cls(turbine=TurbineResult.load(d), gearbox=SimulationResult.load(d),
+                   stats=json.loads((d / "stats.json").read_text()))
 
 
 def _accelerating_equilibrium(asm, r: np.ndarray, speed_rpm: float, loads: dict) -> np.ndarray:

@@ -34,6 +34,7 @@ import pandas as pd
 
 from ..errors import ModelError
 from ..model.schema import REQUIRED, Field, Table
+from ..result_io import read_csv
 from .airfoil import Airfoil
 from .generator import InductionGenerator
 from .rotor import LOAD_COLUMNS, Rotor
@@ -231,12 +232,25 @@ class TurbineResult:
         return fig
 
     def save(self, directory) -> Path:
+        """Write ``turbine_loads.csv`` and ``turbine.json`` (settings, cut-in time):
+        what :meth:`load` reads back."""
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
         self.loads.to_csv(d / "turbine_loads.csv", index_label="time")
         (d / "turbine.json").write_text(json.dumps(
             {**self.settings, "cut_in_time": self.cut_in_time}, indent=2, default=str))
         return d
+
+    @classmethod
+    def load(cls, directory) -> TurbineResult:
+        """The result :meth:`save` wrote to ``directory`` (floats exact)."""
+        d = Path(directory)
+        loads = read_csv(d / "turbine_loads.csv", index_col="time")
+        if "generator_connected" in loads:
+            loads["generator_connected"] = loads["generator_connected"].astype(bool)
+        meta = json.loads((d / "turbine.json").read_text())
+        cut = meta.pop("cut_in_time", None)
+        return cls(loads=loads, cut_in_time=cut, settings=meta)
 
     def gearbox_loads(self, ratio: float | None = None) -> dict:
         """Loads for :func:`gearmodal.simulate` on the drivetrain model (``600kw.toml``):
