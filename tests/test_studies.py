@@ -71,18 +71,25 @@ def test_bad_input_is_named_and_a_store_refuses_another_scene(tmp_path):
 
 
 def test_a_sweep_killed_mid_run_resumes_with_only_the_unfinished_cases(tmp_path):
+    """The sweep is killed (SIGKILL, sweep and worker) once two cases are stored: its metrics
+    (tests/sweep_gate.py) hold the next case until then, so the kill lands mid-run whatever
+    the machine's load. Started again, it runs only the unfinished cases."""
     store = tmp_path / "store"
     times = [0.02 + 0.01 * i for i in range(8)]
     script = tmp_path / "run.py"
     script.write_text(textwrap.dedent(f"""
         import concurrent.futures as cf
+        import sys
+        sys.path.insert(0, {str(ROOT / "tests")!r})
         import gearmodal as gm
-        gm.sweep({STAGE!r}, {{"scene.t_end": {times!r}}},
+        from sweep_gate import gated_summarize
+        gm.sweep({STAGE!r}, {{"scene.t_end": {times!r}}}, metrics=gated_summarize,
                  executor=cf.ProcessPoolExecutor(1), store={str(store)!r}, progress=False)
     """))
-    proc = subprocess.Popen([sys.executable, str(script)], start_new_session=True)
     cases = store / "cases"
-    deadline = time.time() + 120
+    env = {**os.environ, "GM_SWEEP_GATE": str(cases)}
+    proc = subprocess.Popen([sys.executable, str(script)], start_new_session=True, env=env)
+    deadline = time.time() + 900  # a bound on a hang only; the gate decides when to kill
     try:
         while time.time() < deadline and proc.poll() is None:
             done = [p for p in cases.glob("*") if not p.name.startswith(".")] \
@@ -99,13 +106,17 @@ def test_a_sweep_killed_mid_run_resumes_with_only_the_unfinished_cases(tmp_path)
     # every stored case is whole (it was renamed into place only when complete)
     for name in finished:
         assert (cases / name / "row.parquet").exists()
-    res = gm.sweep(STAGE, {"scene.t_end": times}, store=store, progress=False, max_workers=2)
+    from sweep_gate import gated_summarize  # the same metrics, ungated in this process
+
+    res = gm.sweep(STAGE, {"scene.t_end": times}, store=store, progress=False, max_workers=2,
+                   metrics=gated_summarize)
     assert set(res.case_id[res.cached]) == set(finished)
     assert int((~res.cached).sum()) == len(times) - len(finished)
     for name, mtime in finished.items():  # not redone
         assert (cases / name / "row.parquet").stat().st_mtime_ns == mtime
     # a third start runs nothing, and the results are those of a fresh run
-    again = gm.sweep(STAGE, {"scene.t_end": times}, store=store, progress=False)
+    again = gm.sweep(STAGE, {"scene.t_end": times}, store=store, progress=False,
+                     metrics=gated_summarize)
     assert again.cached.all()
     np.testing.assert_array_equal(again.n_events, res.n_events)
     fresh = summarize(load_scene(STAGE, {"scene.t_end": times[-1]}).simulate())
@@ -270,7 +281,13 @@ def test_study_cli_errors_are_one_line(capsys):
     assert "--seed: the gravity-torque study does not take it" in capsys.readouterr().err
 
 
+_STARTED = {"barrier": None}
+
+
 def _sleepy_case(t: float) -> dict:
+    # every case of the sweep starts before any fails: which cases are "running" when the
+    # failure arrives does not depend on how fast the machine starts threads
+    _STARTED["barrier"].wait(timeout=300)
     if t < 0:
         raise ValueError(f"t = {t}: negative")
     time.sleep(t)
@@ -278,10 +295,14 @@ def _sleepy_case(t: float) -> dict:
 
 
 def test_a_failing_case_raises_after_the_running_ones_are_stored(tmp_path):
+    import threading
+
+    _STARTED["barrier"] = threading.Barrier(3)
     with pytest.raises(ValueError, match="negative"):
         gm.sweep(_sleepy_case, {"t": [0.3, -1.0, 0.35]}, executor=ThreadPoolExecutor(3),
                  store=tmp_path, metrics=dict, progress=False)
     assert len([p for p in (tmp_path / "cases").iterdir() if not p.name.startswith(".")]) == 2
+    _STARTED["barrier"] = threading.Barrier(1)  # 0.3 is stored: only 0.2 runs
     res = gm.sweep(_sleepy_case, {"t": [0.3, 0.2]}, executor=ThreadPoolExecutor(2),
                    store=tmp_path, metrics=dict, progress=False)
     assert res.cached.tolist() == [True, False]  # 0.3 was kept, 0.2 is new
