@@ -25,6 +25,7 @@ from .errors import ModelError
 from .modal import RPM, eigensolve
 from .model.components import Gear
 from .model.model import Model
+from .model.validate import plausible
 from .modetypes import LOOSE, QUIET, classify
 from .result_io import read_header, write_header
 
@@ -300,6 +301,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     s = np.asarray(speeds_rpm, dtype=float).ravel()
     if s.size < 2 or not np.all(np.isfinite(s)) or np.any(s < 0) or np.any(np.diff(s) <= 0):
         raise ModelError("speeds_rpm", "must be at least two finite, increasing speeds >= 0 rpm")
+    plausible("speeds_rpm", float(s[-1]), "speed_rpm")
     asm = model.assemble()
     asm.require_piecewise_linear("gm.campbell")
     red, N = reduction(asm)  # a coupled system is solved in its constrained coordinates

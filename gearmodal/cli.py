@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ModelError
+from .model.validate import plausible
 
 #: the largest input speed (rpm) and number of speeds a Campbell sweep takes from the command
 #: line (DESIGN 3.3 names 0-3000 rpm; a million speeds would run for days)
@@ -59,6 +60,10 @@ def _loads(args, model) -> dict | None:
         if not np.isfinite(loads[name.strip()]):
             raise ModelError("--load", f"= {item!r}: the value must be a finite number "
                              "(N or N m)")
+        plausible(f"--load {name.strip()}", loads[name.strip()], "load")
+        if name.strip() not in model.load_names:
+            raise ModelError(f"--load {name.strip()}", "no such load; available: "
+                             + ", ".join(model.load_names))
     if args.balance:
         from .static import balance
 
@@ -248,11 +253,13 @@ def cmd_info(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="gearmodal", description="Wind-turbine gearbox dynamics.")
+    p = argparse.ArgumentParser(prog="gearmodal", description="Wind-turbine gearbox dynamics.",
+                                epilog="--debug (anywhere): show the traceback of an internal "
+                                       "error")
     sub = p.add_subparsers(dest="command", required=True)
     c = sub.add_parser("campbell", help="Campbell diagram and modal report of a model file")
     c.add_argument("model", help="model file (TOML)")
-    c.add_argument("--out", required=True, help="output folder")
+    c.add_argument("--out", required=True, type=_out_folder, help="output folder")
     c.add_argument("--speeds", help="input speeds A:B:N in rpm (default 0 to 1.2 x range)")
     c.add_argument("--quiet", action="store_true", help="no progress bar")
     for sp in (c,):
@@ -264,7 +271,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=cmd_campbell)
     m = sub.add_parser("modal", help="modes at one speed, with report")
     m.add_argument("model")
-    m.add_argument("--out", required=True)
+    m.add_argument("--out", required=True, type=_out_folder)
     m.add_argument("--speed", type=float, help="input speed in rpm (default: rated)")
     m.add_argument("--load", action="append", metavar="NAME=VALUE",
                    help="a load in N or N m (repeatable)")
@@ -272,15 +279,15 @@ def build_parser() -> argparse.ArgumentParser:
     m.set_defaults(func=cmd_modal)
     sm = sub.add_parser("simulate", help="simulate a scene (model + loads + solver settings)")
     sm.add_argument("scene", help="scene file (TOML), see gearmodal/scene.py")
-    sm.add_argument("--out", required=True, help="output folder")
+    sm.add_argument("--out", required=True, type=_out_folder, help="output folder")
     sm.add_argument("--t-end", type=float, dest="t_end", help="override the end time, s")
     sm.add_argument("--quiet", action="store_true", help="no progress bar")
     sm.set_defaults(func=cmd_simulate)
     st = sub.add_parser("study", help="run one of the paper's studies (studies/*.py): "
                         + ", ".join(STUDIES))
     st.add_argument("study", choices=STUDIES)
-    st.add_argument("--out", required=True, help="output folder (its store/ makes a rerun "
-                    "resume)")
+    st.add_argument("--out", required=True, type=_out_folder,
+                    help="output folder (its store/ makes a rerun resume)")
     st.add_argument("--duration", type=float, help="simulated time per case, s (turbine "
                     "studies: default 30 s, the paper's start-up, cut-in and operation)")
     st.add_argument("--seed", type=int, help="turbulence seed (default 1)")
@@ -299,7 +306,24 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _out_folder(value: str) -> str:
+    """``--out``: a folder to write into (made if missing), not a file, not empty."""
+    if not value or "\x00" in value:
+        raise argparse.ArgumentTypeError(f"{value!r}: give an output folder")
+    p = Path(value)
+    if p.exists() and not p.is_dir():
+        raise argparse.ArgumentTypeError(f"{value!r} is a file, not a folder")
+    return value
+
+
 def main(argv=None) -> int:
+    """The command line; returns the exit status (0 done, 2 bad input, 3 internal error, 130
+    interrupted). Bad input gets one line naming the field; an internal error one line and a
+    hint (``--debug`` shows its traceback)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    if debug:
+        argv.remove("--debug")
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
@@ -309,6 +333,15 @@ def main(argv=None) -> int:
     except FileNotFoundError as e:
         print(f"gearmodal: error: {e.filename or e}: file not found", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("gearmodal: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # a bug, not the input: one line, and how to see and report it
+        if debug:
+            raise
+        print(f"gearmodal: internal error: {type(e).__name__}: {str(e)[:300]} (a bug: please "
+              "report it with the command; add --debug for the traceback)", file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -68,11 +68,16 @@ def planetary_gears(*, masses=(50.0, 100.0, 500.0), inertias=(0.5, 2.0, 50.0),
     return sun, planet, ring
 
 
-def planetary_stage(dofs: str = "planar", support=1e9, *, angles=(0.0, 2.0, 4.3),
+#: unequal planet angles the teeth can assemble (multiples of 360 / (21 + 99) = 3 deg), so
+#: that no symmetry hides an error
+ANGLES = tuple(math.radians(a) for a in (0.0, 117.0, 243.0))
+
+
+def planetary_stage(dofs: str = "planar", support=1e9, *, angles=ANGLES,
                     carrier_mass: float = 300.0, carrier_inertia: float = 20.0,
                     mesh_stiffness=5e9, gears=None, **kw) -> Model:
-    """A three-planet stage of :func:`planetary_gears` at ``angles`` (rad; unequal by default,
-    so no symmetry hides an error), every bearing and support ``support`` (N/m or a table).
+    """A three-planet stage of :func:`planetary_gears` at ``angles`` (rad; by default
+    :data:`ANGLES`, unequal), every bearing and support ``support`` (N/m or a table).
     Other keywords go to :func:`gearmodal.planetary_stage`."""
     sun, planet, ring = gears if gears is not None else planetary_gears()
     supports = {k: support for k in ("planet_bearing", "carrier_bearing", "sun_support",

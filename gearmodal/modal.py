@@ -19,6 +19,7 @@ import scipy.linalg as sla
 
 from .assembly import Assembly, as_assembly, reduction
 from .errors import ModelError
+from .model.validate import plausible
 from .result_io import read_csv, read_header, write_header
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
@@ -211,6 +212,7 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     speed_rpm = float(speed_rpm)
     if not math.isfinite(speed_rpm) or speed_rpm < 0:
         raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number >= 0 rpm")
+    plausible("speed_rpm", speed_rpm, "speed_rpm")
     asm, name = as_assembly(model)
     asm.require_piecewise_linear("gm.modal")
     red, N = reduction(asm)  # a coupled system is solved in its constrained coordinates

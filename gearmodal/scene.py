@@ -65,11 +65,12 @@ _LOAD_UNIT = "N or N m"
 #: the tables of a scene file (:mod:`gearmodal.model.schema`; ``docs/file-format.md``)
 SCENE = Table("scene", (
     Field("model", "path", default=REQUIRED, doc="model file, relative to the scene file"),
-    Field("t_end", "number", "s", low=0.0, low_open=True, default=REQUIRED, doc="run length"),
+    Field("t_end", "number", "s", low=0.0, low_open=True, default=REQUIRED, doc="run length",
+          limits="time"),
     Field("dt", "number", "s", low=0.0, low_open=True, default=REQUIRED,
-          doc="propagation and output step, at most t_end"),
+          doc="propagation and output step, at most t_end and t_end / 5e7", limits="time"),
     Field("method", "choice", choices=METHODS, default="exact", doc="integrator"),
-    Field("speed_rpm", "number", "rpm", low=0.0,
+    Field("speed_rpm", "number", "rpm", low=0.0, limits="speed_rpm",
           doc="input speed (default 0; turbine scenes: the rotor's, not this)"),
     Field("tolerance", "number", low=0.0, high=10.0, low_open=True, high_open=True,
           note="a relative tolerance in (0, 10), e.g. 0.05",
@@ -324,6 +325,9 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
     t_end, dt, method = sc["t_end"], sc["dt"], sc["method"]
     if dt > t_end:
         raise ModelError("scene.dt", f"= {dt!r}: must be at most scene.t_end = {t_end!r} s")
+    if t_end / dt > 5e7:
+        raise ModelError("scene.dt", f"= {dt!r}: scene.t_end / dt = {t_end / dt:.3g} steps; at "
+                         "most 5e7")
     tolerance = 0.05
     if "tolerance" in sc:
         if method != "auto":

@@ -147,7 +147,7 @@ def test_planet_mesh_phases_and_rates():
     """Parker & Lin's phasing: planet n's ring mesh leads by z_r psi_n / 2 pi, its sun mesh
     lags by z_s psi_n / 2 pi (periods); every mesh of the stage runs z_r periods per carrier
     revolution."""
-    angles = [0.0, 2.0, 4.2]
+    angles = [math.radians(a) for a in (0.0, 117.0, 243.0)]  # unequal, assemblable
     st = gm.examples.planetary_stage(angles=angles, planet_bearing=2e9, sun_support=1e7,
                                      ring_support=None, mesh_alternation=True)
     asm = st.assemble()

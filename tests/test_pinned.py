@@ -14,7 +14,7 @@ from gearmodal.errors import ModelError
 SUN, PLANET, RING = gm.examples.planetary_gears()
 
 
-def _stage(dofs, support, angles=(0.0, 2.0, 4.3)):
+def _stage(dofs, support, angles=gm.examples.ANGLES):
     return gm.examples.planetary_stage(dofs, support, angles=angles)
 
 

@@ -21,6 +21,7 @@ import pandas as pd
 
 from ..assembly import Assembly
 from ..errors import ModelError
+from ..model import validate as v
 from ..model.model import Model
 from .azimuth import AzimuthAssembler
 from .driver import METHODS, Driver, Method, get_method
@@ -29,6 +30,8 @@ from .system import PiecewiseLinearSystem
 
 #: pandas 3 has a string dtype of its own ("str"); pandas 2 keeps labels as objects
 _PANDAS_3 = int(pd.__version__.split(".")[0]) >= 3
+#: most output steps of a run (each a row of the result's tables)
+MAX_STEPS = 5e7
 
 __all__ = ["METHODS", "Driver", "Method", "SimulationResult", "build_result", "event_array",
            "get_method", "reconcile", "simulate"]
@@ -58,6 +61,7 @@ def _load_grid(asm: Assembly, loads, t: np.ndarray) -> np.ndarray:
                                  "callable of time or a pandas Series") from None
         if not np.all(np.isfinite(U[:, j])):
             raise ModelError(f"loads.{name}", "has non-finite values")
+        v.plausible(f"loads.{name}", float(np.abs(U[:, j]).max(initial=0.0)), "load")
     return U
 
 
@@ -67,7 +71,9 @@ def _initial(asm: Assembly, values, label: str) -> np.ndarray:
         if name not in asm.dof_names:
             raise ModelError(f"{label}.{name}", "no such DOF; available: "
                              + ", ".join(asm.dof_names))
-        out[asm.dof_names.index(name)] = float(val)
+        x = v.number(f"{label}.{name}", val, "m or rad" if label == "q0" else "m/s or rad/s")
+        out[asm.dof_names.index(name)] = v.plausible(
+            f"{label}.{name}", x, "displacement" if label == "q0" else "velocity")
     return out
 
 
@@ -137,12 +143,16 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     if not isinstance(speed_rpm, (int, float)) or isinstance(speed_rpm, bool) \
             or not math.isfinite(speed_rpm):
         raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number (rpm)")
+    v.plausible("speed_rpm", float(speed_rpm), "speed_rpm")
+    v.plausible("t_end", float(t_end), "time")
+    v.plausible("dt", float(dt), "time")
     if dt > t_end:
         raise ModelError("dt", f"= {dt!r}: must be at most t_end = {t_end!r} s (the run would "
                          f"end at {dt!r} s)")
+    if t_end / dt > MAX_STEPS:
+        raise ModelError("dt", f"= {dt!r}: t_end / dt = {t_end / dt:.3g} output steps; at most "
+                         f"{MAX_STEPS:.0e} (a longer dt, or a shorter t_end = {t_end!r} s)")
     n_steps = int(math.ceil(t_end / dt - 1e-9))
-    if n_steps > 50_000_000:
-        raise ModelError("dt", f"= {dt!r}: {n_steps} steps to {t_end} s is more than 5e7")
     from ..coupling import Coupled
 
     omega = float(speed_rpm) * 2 * math.pi / 60  # the input azimuth is omega t

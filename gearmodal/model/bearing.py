@@ -23,6 +23,8 @@ __all__ = ["CLEARANCE_SHAPES", "MAX_FACETS", "Bearing", "Shaft"]
 #: how a bearing's x/y clearances combine (:class:`Bearing`)
 CLEARANCE_SHAPES = ("axes", "polygon", "round")
 MAX_FACETS = 720
+#: the plausibility limits (validate.LIMITS) of a bearing's tables
+_KIND = {"stiffness": "stiffness", "damping": "damping", "clearance": "gap"}
 
 
 def _acts(w: np.ndarray) -> bool:
@@ -91,7 +93,8 @@ class Bearing:
                 if key not in DIRECTIONS:
                     raise ModelError(f"{f}.{label}.{key}", "unknown direction; allowed: "
                                      + ", ".join(DIRECTIONS))
-                d[key] = v.nonnegative(f"{f}.{label}.{key}", d[key], unit)
+                d[key] = v.plausible(f"{f}.{label}.{key}", v.nonnegative(
+                    f"{f}.{label}.{key}", d[key], unit), _KIND[label])
         for key in list(self.damping) + list(self.clearance):
             if key not in self.stiffness:
                 raise ModelError(f"{f}.stiffness.{key}", "missing: damping or clearance is "
@@ -101,7 +104,8 @@ class Bearing:
             at = (*at, 0.0)
         if len(at) != 3:
             raise ModelError(f"{f}.at", f"= {self.at!r}: expected (x, y, z) in m")
-        self.at = tuple(v.number(f"{f}.at", p, "m") for p in at)
+        self.at = tuple(v.plausible(f"{f}.at", v.number(f"{f}.at", p, "m"), "length")
+                        for p in at)
         self.axes_angle = v.number(f"{f}.axes_angle", self.axes_angle, "rad")
         v.choice(f"{f}.clearance_shape", self.clearance_shape, CLEARANCE_SHAPES)
         self.facets = v.integer(f"{f}.facets", self.facets, minimum=3)
@@ -204,8 +208,10 @@ def Shaft(name: str, a: str, b: str, stiffness: float, damping: float = 0.0) -> 
     ``stiffness`` in N m/rad and ``damping`` in N m s/rad act on the relative rotation
     ``theta_a - theta_b``.
     """
-    k = v.nonnegative(f"{name}.stiffness", stiffness, "N m/rad")
-    c = v.nonnegative(f"{name}.damping", damping, "N m s/rad")
+    k = v.plausible(f"{name}.stiffness", v.nonnegative(f"{name}.stiffness", stiffness,
+                                                         "N m/rad"), "stiffness")
+    c = v.plausible(f"{name}.damping", v.nonnegative(f"{name}.damping", damping, "N m s/rad"),
+                    "damping")
     return Bearing(name, a, b, stiffness={"theta": k}, damping={"theta": c} if c else {})
 
 
@@ -215,13 +221,13 @@ Bearing.SCHEMA = Table("bearings", (
     Field("a", "name", default=REQUIRED, doc="body a"),
     Field("b", "name", doc="body b (default: the ground)"),
     Field("stiffness", "directions", "N/m or N m/rad", low=0.0, default={},
-          doc="per direction x, y, z, rx, ry, theta"),
+          doc="per direction x, y, z, rx, ry, theta", limits="stiffness"),
     Field("damping", "directions", "N s/m or N m s/rad", low=0.0, default={},
-          doc="per direction"),
+          doc="per direction", limits="damping"),
     Field("clearance", "directions", "m or rad", low=0.0, default={},
-          doc="dead band on each side, per direction"),
+          doc="dead band on each side, per direction", limits="gap"),
     Field("at", "vector", "m", lengths=(2, 3), default=(0.0, 0.0, 0.0),
-          doc="point where it acts, from a's centre in a's frame"),
+          doc="point where it acts, from a's centre in a's frame", limits="length"),
     Field("axes_angle", "angle", "rad", default=0.0, doc="bearing axes about z"),
     Field("axes_frame", "name", doc="frame of the bearing axes (default: b's, or the ground)"),
     Field("clearance_shape", "choice", choices=CLEARANCE_SHAPES, default="axes",

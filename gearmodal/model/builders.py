@@ -32,7 +32,9 @@ def _gear(g: Gear, field: str, name: str, dofs: str) -> Gear:
     return out
 
 
-def _same_tooth_system(field: str, a: Gear, b: Gear) -> None:
+def _same_tooth_system(field: str, a: Gear, b: Gear, internal: bool = False) -> None:
+    """Gears that can mesh: one module and pressure angle, helix angles of one size and of
+    opposite hands on an external pair, the same hand on an internal one (ring)."""
     if not math.isclose(a.module, b.module, rel_tol=1e-12):
         raise ModelError(field, f"modules differ ({a.name}: {a.module:g} m, {b.name}: "
                                 f"{b.module:g} m); meshing gears need the same module")
@@ -42,6 +44,11 @@ def _same_tooth_system(field: str, a: Gear, b: Gear) -> None:
     if not math.isclose(abs(a.helix_angle), abs(b.helix_angle), rel_tol=1e-12, abs_tol=1e-15):
         raise ModelError(field, f"helix angles differ in size ({a.helix_angle:g} rad vs "
                                 f"{b.helix_angle:g} rad)")
+    if a.helix_angle != 0.0 and (a.helix_angle == b.helix_angle) != internal:
+        need = "the same hand (an internal pair)" if internal else "opposite hands (an " \
+            "external pair)"
+        raise ModelError(f"{field}.helix_angle", f"= {b.helix_angle:g} rad against "
+                         f"{a.name}'s {a.helix_angle:g} rad: helical gears mesh with {need}")
 
 
 def _alternation(field: str, spec, key: str | None = None, phase: float = 0.0) -> dict:
@@ -259,6 +266,31 @@ def _planet_angles(field: str, angles, n: int) -> list[float]:
     return [v.number(f"{field}[{i}]", a, "rad") for i, a in enumerate(angles)]
 
 
+def _planets_fit(name: str, given: bool, psi: list, centre: float, planet: Gear,
+                 teeth: int) -> None:
+    """Planets that can be built: no two whose tip circles (radius pitch + one module)
+    intersect, and each at an angle from planet 1 where the teeth of sun and ring let it in,
+    a multiple of ``2 pi / (z_sun + z_ring)`` (the assembly condition)."""
+    field = f"{name}.planet_angles" if given else f"{name}.n_planets"
+    tip = planet.pitch_radius + planet.module
+    for i in range(len(psi)):
+        for j in range(i):
+            d = 2.0 * centre * abs(math.sin(0.5 * (psi[i] - psi[j])))
+            if d < 2.0 * tip * (1.0 - 1e-9):
+                where = f"{field}[{i}]" if given else field
+                raise ModelError(where, f"planets {j + 1} and {i + 1} overlap: their centres "
+                                 f"are {d:.4g} m apart, their tip circles need {2 * tip:.4g} m")
+    if given:
+        pitch = 2.0 * math.pi / teeth
+        for i in range(1, len(psi)):
+            k = (psi[i] - psi[0]) / pitch
+            if abs(k - round(k)) > 1e-6:
+                raise ModelError(f"{field}[{i}]", f"= {psi[i]:.6g} rad: the teeth cannot "
+                                 f"assemble planet {i + 1} there: its angle from planet 1 must "
+                                 f"be a multiple of 2 pi / (sun + ring teeth) = {pitch:.6g} rad "
+                                 f"({360.0 / teeth:.6g} deg); {k:.4f} pitches is not")
+
+
 def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
                     carrier_mass: float, carrier_inertia: float,
                     mesh_stiffness, backlash: float = 0.0, mesh_damping: float = 0.0,
@@ -301,7 +333,7 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
     if s.internal or p.internal:
         raise ModelError(f"{name}.sun.internal", "sun and planet must be external gears")
     _same_tooth_system(f"{name}.planet", s, p)
-    _same_tooth_system(f"{name}.ring", p, r)
+    _same_tooth_system(f"{name}.ring", p, r, internal=True)
     if r.teeth != s.teeth + 2 * p.teeth:
         raise ModelError(f"{name}.ring.teeth", f"= {r.teeth}: ring teeth must equal sun + 2 * "
                          f"planet ({s.teeth} + 2 * {p.teeth} = {s.teeth + 2 * p.teeth})")
@@ -318,6 +350,7 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
     else:
         k_sp = k_rp = mesh_stiffness
     centre = (s.base_radius + p.base_radius) / math.cos(s.transverse_pressure_angle)
+    _planets_fit(name, planet_angles is not None, psi, centre, p, s.teeth + r.teeth)
 
     m = Model(name, input="carrier")
     m.add(Frame("carrier", 1.0))

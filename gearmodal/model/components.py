@@ -119,12 +119,13 @@ class Body:
         f = self._label()
         if self.name:
             v.name(f"{type(self).__name__}.name", self.name)
-        self.mass = v.positive(f"{f}.mass", self.mass, "kg")
-        self.inertia = v.positive(f"{f}.inertia", self.inertia, "kg m^2")
+        self.mass = v.plausible(f"{f}.mass", v.positive(f"{f}.mass", self.mass, "kg"), "mass")
+        self.inertia = v.plausible(f"{f}.inertia", v.positive(f"{f}.inertia", self.inertia,
+                                                              "kg m^2"), "inertia")
         if self.inertia_diametral is None:
             self.inertia_diametral = self.inertia / 2.0
-        self.inertia_diametral = v.positive(f"{f}.inertia_diametral", self.inertia_diametral,
-                                            "kg m^2")
+        self.inertia_diametral = v.plausible(f"{f}.inertia_diametral", v.positive(
+            f"{f}.inertia_diametral", self.inertia_diametral, "kg m^2"), "inertia")
         v.choice(f"{f}.dofs", self.dofs, DOF_LEVELS)
         if not isinstance(self.frame, str):
             raise ModelError(f"{f}.frame", f"expected a frame name, got {self.frame!r}")
@@ -133,7 +134,8 @@ class Body:
             pos = (*pos, 0.0)
         if len(pos) != 3:
             raise ModelError(f"{f}.position", f"= {self.position!r}: expected (x, y, z) in m")
-        self.position = tuple(v.number(f"{f}.position", p, "m") for p in pos)
+        self.position = tuple(v.plausible(f"{f}.position", v.number(f"{f}.position", p, "m"),
+                                          "length") for p in pos)
         self.orientation = v.number(f"{f}.orientation", self.orientation, "rad")
         self.speed_ratio = v.number(f"{f}.speed_ratio", self.speed_ratio)
         if self.rotation_scale is not None:
@@ -208,11 +210,13 @@ class Gear(Body):
 
     def __post_init__(self):
         f = self._label()
-        self.teeth = v.integer(f"{f}.teeth", self.teeth, minimum=3)
+        self.teeth = v.plausible(f"{f}.teeth", v.integer(f"{f}.teeth", self.teeth, minimum=3),
+                                 "teeth")
         self.module = v.positive(f"{f}.module", self.module, "m")
         if self.module > 1.0:
             raise ModelError(f"{f}.module", f"= {self.module!r} m: must be <= 1 m "
                                             "(modules are in metres: 10 mm = 0.010)")
+        v.plausible(f"{f}.module", self.module, "module")
         self.pressure_angle = v.angle(f"{f}.pressure_angle", self.pressure_angle,
                                       low=1e-6, high=math.pi / 4)
         self.helix_angle = v.angle(f"{f}.helix_angle", self.helix_angle,
@@ -247,16 +251,18 @@ class Gear(Body):
 # -- file schema of each component (gearmodal.model.schema; the "components" model files) ----
 _BODY_FIELDS = (
     NAME,
-    Field("mass", "number", "kg", low=0.0, low_open=True, default=REQUIRED, doc="mass"),
+    Field("mass", "number", "kg", low=0.0, low_open=True, default=REQUIRED, doc="mass",
+          limits="mass"),
     Field("inertia", "number", "kg m^2", low=0.0, low_open=True, default=REQUIRED,
-          doc="polar moment of inertia about the body's own axis"),
+          doc="polar moment of inertia about the body's own axis", limits="inertia"),
     Field("inertia_diametral", "number", "kg m^2", low=0.0, low_open=True,
-          doc="moment of inertia about a diameter (default inertia / 2; full level only)"),
+          doc="moment of inertia about a diameter (default inertia / 2; full level only)",
+          limits="inertia"),
     Field("dofs", "choice", choices=DOF_LEVELS, default="torsional",
           doc="DOF level: which local coordinates exist"),
     Field("frame", "name", default=GROUND, doc="frame the body's coordinates are in"),
     Field("position", "vector", "m", lengths=(2, 3), default=(0.0, 0.0, 0.0),
-          doc="centre in its frame, [x, y, z]"),
+          doc="centre in its frame, [x, y, z]", limits="length"),
     Field("orientation", "angle", "rad", default=0.0,
           doc="angle of the local axes about z in the frame"),
     Field("speed_ratio", "number", default=0.0,
@@ -279,9 +285,9 @@ Body.SCHEMA = Table("bodies (kind = \"body\")", _BODY_FIELDS, "A plain rigid bod
                     extra_keys=("kind",))
 Gear.SCHEMA = Table("bodies (kind = \"gear\")", (
     NAME,
-    Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth"),
+    Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth", limits="teeth"),
     Field("module", "number", "m", low=0.0, low_open=True, high=1.0, default=REQUIRED,
-          doc="normal module (10 mm = 0.010)"),
+          doc="normal module (10 mm = 0.010)", limits="module"),
     Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 4, high_open=True,
           default=REQUIRED, doc="normal pressure angle"),
     Field("helix_angle", "angle", "rad", low=-math.pi / 4, high=math.pi / 4, high_open=True,

@@ -25,11 +25,12 @@ def _required(f: Field) -> Field:
 _POS = {"low": 0.0, "low_open": True}
 _NONNEG = {"low": 0.0}
 _DOFS = Field("dofs", "choice", choices=DOF_LEVELS, doc="DOF level of the bodies")
-_MASS = Field("mass", "number", "kg", **_POS, default=REQUIRED, doc="mass")
+_MASS = Field("mass", "number", "kg", **_POS, default=REQUIRED, doc="mass", limits="mass")
 _INERTIA = Field("inertia", "number", "kg m^2", **_POS, default=REQUIRED,
-                 doc="polar moment of inertia")
+                 doc="polar moment of inertia", limits="inertia")
 _DIAMETRAL = Field("inertia_diametral", "number", "kg m^2", **_POS,
-                   doc="moment of inertia about a diameter (default inertia / 2)")
+                   doc="moment of inertia about a diameter (default inertia / 2)",
+                   limits="inertia")
 _ALTERNATION = Field("mesh_alternation", "alternation", default=False,
                      doc="true, or a table of contact_ratio, stiffness_ratio, phase: the mesh "
                          "stiffness alternates between single and double tooth-pair contact")
@@ -43,9 +44,10 @@ MODEL = Table("model", (
           doc="[low, high] operating range of the input")),
     "Every model file's `[model]` table.")
 GEAR = Table("gear (sun, planet, ring, gear, pinion, wheel)", (
-    Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth"),
+    Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth", limits="teeth"),
     Field("module", "number", "m", **_POS, high=1.0, default=REQUIRED,
-          doc="normal module (10 mm = 0.010)", note="modules are in metres: 10 mm = 0.010"),
+          doc="normal module (10 mm = 0.010)", note="modules are in metres: 10 mm = 0.010",
+          limits="module"),
     Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 4, high_open=True,
           degrees=True, default=REQUIRED, doc="normal pressure angle"),
     Field("helix_angle", "angle", "rad", low=-math.pi / 4, high=math.pi / 4, high_open=True,
@@ -60,8 +62,9 @@ BODY = Table("body (rotor, generator, housing)", (
 CARRIER = Table("carrier", (_MASS, _INERTIA, _DIAMETRAL), "A planetary stage's carrier.")
 SHAFT = Table("shaft (main_shaft, hss_shaft)", (
     Field("stiffness", "number", "N m/rad", **_NONNEG, default=REQUIRED,
-          doc="torsional stiffness"),
-    Field("damping", "number", "N m s/rad", **_NONNEG, default=0.0, doc="torsional damping")),
+          doc="torsional stiffness", limits="stiffness"),
+    Field("damping", "number", "N m s/rad", **_NONNEG, default=0.0, doc="torsional damping",
+          limits="damping")),
     "A torsional shaft.")
 _B = Bearing.SCHEMA.by_key()
 SUPPORT = Table("support (a bearing given as a table)", (
@@ -72,14 +75,16 @@ SUPPORT = Table("support (a bearing given as a table)", (
 _STAGE_COMMON = (
     Field("type", "choice", choices=STAGE_TYPES, doc="stage type (in `[[stages]]`: required)"),
     Field("name", "name", doc="DOF name prefix in a drivetrain (default `stage<k>`)"),
-    Field("coupling_stiffness", "number", "N m/rad", **_NONNEG,
+    Field("coupling_stiffness", "number", "N m/rad", **_NONNEG, limits="stiffness",
           doc="torsional coupling to the previous stage's output (not on the first stage; "
               "default 1e9)"),
     dataclasses.replace(_DOFS, default="planar"),
     Field("mesh_stiffness", "per_mesh", "N/m", **_NONNEG, default=REQUIRED,
-          doc="mesh stiffness on the line of action"),
-    Field("backlash", "number", "m", **_NONNEG, default=0.0, doc="backlash on the line of action"),
-    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping"),
+          doc="mesh stiffness on the line of action", limits="stiffness"),
+    Field("backlash", "number", "m", **_NONNEG, default=0.0, doc="backlash on the line of action",
+          limits="gap"),
+    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping",
+          limits="damping"),
     _ALTERNATION)
 PLANETARY = Table("planetary stage (`[planetary_stage]` or a `[[stages]]` entry)", (
     *_STAGE_COMMON,
@@ -109,9 +114,11 @@ PARALLEL = Table("parallel stage (`[parallel_stage]` or a `[[stages]]` entry)", 
 GEAR_PAIR = Table("gear_pair", (
     dataclasses.replace(_DOFS, default="torsional"),
     Field("mesh_stiffness", "number", "N/m", **_NONNEG, default=REQUIRED,
-          doc="mesh stiffness on the line of action"),
-    Field("backlash", "number", "m", **_NONNEG, default=REQUIRED, doc="backlash"),
-    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping"),
+          doc="mesh stiffness on the line of action", limits="stiffness"),
+    Field("backlash", "number", "m", **_NONNEG, default=REQUIRED, doc="backlash",
+          limits="gap"),
+    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping",
+          limits="damping"),
     Field("bearing", "support", doc="both wheels to the ground (required unless torsional)"),
     Field("pinion", "table", default=REQUIRED, doc="gear table"),
     Field("wheel", "table", default=REQUIRED, doc="gear table"),
@@ -123,8 +130,9 @@ LIN_PARKER = Table("lin_parker_stage", (
           doc="pressure angle, a number or {sun_planet, ring_planet}"),
     Field("planet_angles", "vector", "rad", degrees=True,
           doc="planet positions (default equally spaced)"),
-    Field("backlash", "number", "m", **_NONNEG, default=0.0, doc="backlash"),
-    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping"),
+    Field("backlash", "number", "m", **_NONNEG, default=0.0, doc="backlash", limits="gap"),
+    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping",
+          limits="damping"),
     Field("mass", "table", "kg", default=REQUIRED, doc="carrier, ring, sun, planet"),
     Field("inertia_over_r2", "table", "kg", default=REQUIRED, doc="carrier, ring, sun, planet"),
     Field("bearing", "table", "N/m", default=REQUIRED, doc="carrier, ring, sun, planet"),
@@ -139,9 +147,10 @@ PER_MESH_ANGLE = Table("lin_parker_stage pressure angles", (
           default=REQUIRED, doc="ring-planet meshes")),
     "Lin & Parker's pressure angles per mesh kind, in degrees.")
 PER_MESH = Table("per mesh (sun_planet, ring_planet)", (
-    Field("sun_planet", "number", "N/m", **_NONNEG, default=REQUIRED, doc="sun-planet meshes"),
+    Field("sun_planet", "number", "N/m", **_NONNEG, default=REQUIRED, doc="sun-planet meshes",
+          limits="stiffness"),
     Field("ring_planet", "number", "N/m", **_NONNEG, default=REQUIRED,
-          doc="ring-planet meshes")),
+          doc="ring-planet meshes", limits="stiffness")),
     "A value per mesh kind.")
 _BODIES4 = ("carrier", "ring", "sun", "planet")
 LIN_PARKER_BODIES = Table("lin_parker_stage per body", tuple(

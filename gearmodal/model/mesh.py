@@ -84,9 +84,12 @@ class Mesh:
             raise ModelError(f"{f}.stiffness_ratio", f"= {self.stiffness_ratio!r}: must lie in "
                              "[1, 10] (double-pair over single-pair stiffness)")
         self.phase = v.number(f"{f}.phase", self.phase)
-        self.stiffness = v.nonnegative(f"{f}.stiffness", self.stiffness, "N/m")
-        self.backlash = v.nonnegative(f"{f}.backlash", self.backlash, "m")
-        self.damping = v.nonnegative(f"{f}.damping", self.damping, "N s/m")
+        self.stiffness = v.plausible(f"{f}.stiffness", v.nonnegative(
+            f"{f}.stiffness", self.stiffness, "N/m"), "stiffness")
+        self.backlash = v.plausible(f"{f}.backlash", v.nonnegative(
+            f"{f}.backlash", self.backlash, "m"), "gap")
+        self.damping = v.plausible(f"{f}.damping", v.nonnegative(
+            f"{f}.damping", self.damping, "N s/m"), "damping")
         if self.side not in (1, -1):
             raise ModelError(f"{f}.side", f"= {self.side!r}: must be +1 or -1")
         if self.pressure_angle is not None:
@@ -138,9 +141,12 @@ Mesh.SCHEMA = Table("meshes", (
     Field("gear_a", "name", default=REQUIRED, doc="first gear (the ring of an internal pair)"),
     Field("gear_b", "name", default=REQUIRED, doc="second gear"),
     Field("stiffness", "number", "N/m", low=0.0, default=REQUIRED,
-          doc="mesh stiffness along the line of action (the mean if alternating)"),
-    Field("backlash", "number", "m", low=0.0, default=0.0, doc="backlash on the line of action"),
-    Field("damping", "number", "N s/m", low=0.0, default=0.0, doc="mesh damping"),
+          doc="mesh stiffness along the line of action (the mean if alternating)",
+          limits="stiffness"),
+    Field("backlash", "number", "m", low=0.0, default=0.0, doc="backlash on the line of action",
+          limits="gap"),
+    Field("damping", "number", "N s/m", low=0.0, default=0.0, doc="mesh damping",
+          limits="damping"),
     Field("side", "integer", low=-1, high=1, default=1,
           doc="+1 or -1: which line of action is the front flank"),
     Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 2, high_open=True,

@@ -63,6 +63,8 @@ class Field:
     choices : allowed values of a ``choice``.
     lengths : the allowed numbers of entries of a ``vector`` (any if empty).
     note : a hint added to range errors (``modules are in metres: 10 mm = 0.010``).
+    limits : a kind of :data:`gearmodal.model.validate.LIMITS` (``"mass"``...): the range of
+        ``|value|`` the solvers handle, checked after ``low``/``high``.
     """
 
     key: str
@@ -78,6 +80,7 @@ class Field:
     choices: tuple = ()
     lengths: tuple = ()
     note: str = ""
+    limits: str = ""
 
     @property
     def required(self) -> bool:
@@ -127,6 +130,8 @@ class Field:
                           else -(2**62))
             if self.high is not None and x > self.high:
                 raise ModelError(path, f"= {x}: must be an integer <= {self.high:g}")
+            if self.limits:
+                v.plausible(path, x, self.limits)
             return x
         if t == "boolean":
             if not isinstance(value, bool):
@@ -199,6 +204,8 @@ class Field:
             msg = f"must be {'<' if self.high_open else '<='} {self.high:g}{u}"
         if msg:
             raise ModelError(path, f"= {x!r}: {msg}" + (f" ({self.note})" if self.note else ""))
+        if self.limits:
+            v.plausible(path, x, self.limits)
 
 
 def _dotted_name(path: str, value) -> str:
@@ -365,6 +372,9 @@ def reference_markdown(sections: list[tuple[str, str, list[Table]]]) -> str:
                 elif f.type == "vector":
                     n = " or ".join(map(str, f.lengths))
                     typ = f"array of {n} numbers" if n else typ
+                if f.limits:
+                    lo, hi, _ = v.LIMITS[f.limits]
+                    rng = f"{rng}; solvers: |x| in [{lo:g}, {hi:g}]".lstrip("; ")
                 dflt = "required" if f.required else ("—" if f.default is None
                                                       else f"`{_show(f.default)}`")
                 lines.append(f"| `{key}` | {typ} | {unit} | {rng if rng != unit else ''} | "

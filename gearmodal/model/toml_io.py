@@ -179,6 +179,8 @@ def load(path, overrides: dict | None = None) -> Model:
     except UnicodeDecodeError as e:
         raise ModelError(str(p), f"not a UTF-8 text file ({e.reason} at byte {e.start})") \
             from None
+    except ValueError as e:  # a NUL byte in the path
+        raise ModelError(str(p)[:200], f"cannot read the file: {e}") from None
     return loads(text, source=str(p), default_name=p.stem, overrides=overrides)
 
 
@@ -252,6 +254,8 @@ def loads(text: str, source: str = "<string>", *, default_name: str | None = Non
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ModelError(source, _syntax_message(e)) from None
+    except RecursionError:
+        raise ModelError(source, "TOML nested too deeply") from None
     doc = override(doc, overrides)
     try:
         return _build(doc, default_name)

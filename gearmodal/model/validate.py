@@ -39,6 +39,40 @@ def number(field: str, value, unit: str = "", *, minimum: float | None = None,
     return v
 
 
+#: The range of each kind of input the solvers are made for (a margin around the integrator's
+#: stability map, benchmarks/stability_map.py: masses 0.1..1e5 kg, mesh stiffness 1e6..1e11
+#: N/m, exact at every one of them). Outside it the double precision the eigen-solvers and the
+#: exact method need runs out (a 1e-300 kg ring gives NaN modes, a 1e300 N s/m damper a
+#: 1e119 Hz mode) or the input is a typo (teeth = 1e300). kind -> (low, high, unit) of |value|.
+LIMITS = {
+    "mass": (1e-6, 1e8, "kg"),
+    "inertia": (1e-12, 1e10, "kg m^2"),
+    "stiffness": (0.0, 1e16, "N/m or N m/rad"),
+    "damping": (0.0, 1e10, "N s/m or N m s/rad"),
+    "gap": (0.0, 0.1, "m or rad"),
+    "length": (0.0, 1e3, "m"),
+    "module": (1e-4, 1.0, "m"),
+    "teeth": (3, 10_000, ""),
+    "speed_rpm": (0.0, 1e5, "rpm"),
+    "load": (0.0, 1e12, "N or N m"),
+    "displacement": (0.0, 10.0, "m or rad"),
+    "velocity": (0.0, 1e4, "m/s or rad/s"),
+    "time": (1e-12, 1e6, "s"),
+}
+
+
+def plausible(field: str, value: float, kind: str) -> float:
+    """``value`` unless ``|value|`` lies outside ``LIMITS[kind]`` (zero always allowed where
+    the range starts at 0): :class:`ModelError` naming the field, the value and the range."""
+    lo, hi, unit = LIMITS[kind]
+    a = abs(value)
+    if (a == 0.0 and lo == 0.0) or lo <= a <= hi:
+        return value
+    u = f" {unit}" if unit else ""
+    raise ModelError(field, f"= {value!r}: outside the range gearmodal's solvers handle, "
+                            f"|value| in [{lo:g}, {hi:g}]{u}")
+
+
 def positive(field: str, value, unit: str = "") -> float:
     """A number > 0 (masses, inertias, modules, radii)."""
     return number(field, value, unit, minimum=0.0, strict=True)
