@@ -256,6 +256,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gearmodal", description="Wind-turbine gearbox dynamics.",
                                 epilog="--debug (anywhere): show the traceback of an internal "
                                        "error")
+    from . import __version__
+
+    p.add_argument("--version", action="version", version=f"gearmodal {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     c = sub.add_parser("campbell", help="Campbell diagram and modal report of a model file")
     c.add_argument("model", help="model file (TOML)")

@@ -5,6 +5,7 @@ import sys
 from pathlib import Path
 
 import pandas as pd
+import pytest
 
 from gearmodal.cli import main
 
@@ -89,3 +90,11 @@ def test_bad_flags_and_scene_values_are_refused_by_name(tmp_path, capsys):
     turb.write_text(text)
     assert main(["simulate", str(turb), "--out", out]) == 2
     assert "turbine.connected" in capsys.readouterr().err
+
+
+def test_version(capsys):
+    import gearmodal as gm
+
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0 and capsys.readouterr().out.strip() == f"gearmodal {gm.__version__}"
