@@ -1,4 +1,5 @@
-"""The README's Python examples run as written (from the repository root)."""
+"""The Python examples of the README and of the guide (docs/**/*.md) run as written (from the
+repository root)."""
 
 import re
 from pathlib import Path
@@ -8,14 +9,21 @@ import pytest
 
 matplotlib.use("Agg")
 
-BLOCKS = re.findall(r"```python\n(.*?)```", Path("README.md").read_text(), re.S)
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+BLOCKS = [(p, i, code) for p in PAGES
+          for i, code in enumerate(re.findall(r"```python\n(.*?)```", p.read_text(), re.S))]
 
 
-@pytest.mark.parametrize("i", range(len(BLOCKS)))
-def test_readme_python_block_runs(i, tmp_path, monkeypatch):
-    code = BLOCKS[i]
-    root = Path.cwd()
+def test_the_pages_have_examples():
+    pages = {p.name for p, _, _ in BLOCKS}
+    assert {"README.md", "models.md", "simulation.md", "studies.md"} <= pages
+
+
+@pytest.mark.parametrize("page, i, code", BLOCKS,
+                         ids=[f"{p.relative_to(ROOT)}:{i}" for p, i, _ in BLOCKS])
+def test_python_block_runs(page, i, code, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    # paths in the README are relative to the repository root
-    code = code.replace('"studies/', f'"{root}/studies/')
-    exec(compile(code, f"README block {i}", "exec"), {})
+    # paths in the pages are relative to the repository root
+    code = code.replace('"studies/', f'"{ROOT}/studies/')
+    exec(compile(code, f"{page.name} block {i}", "exec"), {})

@@ -123,6 +123,8 @@ def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
         ``contact_ratio``, ``stiffness_ratio``, ``phase``: the stiffness alternates between
         single and double tooth-pair contact at the mesh frequency (:class:`Mesh`).
 
+    Notes
+    -----
     DOFs are ``"pinion.theta"``, ``"wheel.theta"`` (plus ``.x``, ``.y``...); loads
     ``"pinion.torque"``, ``"wheel.torque"`` (N m). The pinion is the input and sits at the
     origin, the wheel on +x at the standard centre distance. A positive pinion torque closes the
@@ -318,6 +320,8 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         contact at the mesh frequency (:class:`Mesh`), planet n's meshes phased by the planet
         spacing (Parker & Lin 2004); the sun-ring phase is taken as 0.
 
+    Notes
+    -----
     All bodies' coordinates are expressed in the frame rotating with the carrier (Lin & Parker
     1999). Bodies: ``carrier``, ``sun``, ``ring``, ``planet1..N`` (planet translations ``zeta``
     radial, ``eta`` tangential). The carrier is the input (speed ratio 1), the sun turns at
