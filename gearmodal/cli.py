@@ -71,10 +71,30 @@ def _loads(args, model) -> dict | None:
     return loads or None
 
 
+def _library() -> Path:
+    """The folder of the shipped studies and example files: the installed
+    ``gearmodal.library`` (the source tree's ``studies/``, mapped there by pyproject.toml)."""
+    try:
+        import gearmodal.library as lib
+    except ImportError:  # run from a source tree that was never installed
+        return Path(__file__).resolve().parents[1] / "studies"
+    return Path(lib.__file__).resolve().parent
+
+
+def _named(path: str, kind: str) -> str:
+    """A file given by its path, or a shipped example by its name (``600kw``: the model
+    ``models/600kw.toml`` of :func:`_library`)."""
+    p = Path(path)
+    if p.exists() or p.suffix or not path:
+        return path
+    shipped = _library() / kind / f"{path}.toml"
+    return str(shipped) if shipped.is_file() else path
+
+
 def _load(path: str):
     from .model.toml_io import load
 
-    return load(path)
+    return load(_named(path, "models"))
 
 
 def cmd_campbell(args) -> int:
@@ -117,7 +137,7 @@ def cmd_simulate(args) -> int:
 
     from .scene import load_scene
 
-    scene = load_scene(args.scene)
+    scene = load_scene(_named(args.scene, "scenes"))
     if args.t_end is not None:
         if not args.t_end > 0:
             raise ModelError("--t-end", f"= {args.t_end!r}: must be > 0 s")
@@ -195,18 +215,17 @@ STUDIES = ("double-contact", "gravity-torque", "mounting-azimuth", "clearance-ma
 
 
 def _study_module(name: str, folder: str | None):
-    """The study script ``studies/<name>.py`` of the source tree (or ``--studies DIR``,
-    or the environment variable GEARMODAL_STUDIES), imported as a module."""
+    """The study script ``<name>.py`` shipped with gearmodal (:func:`_library`; or
+    ``--studies DIR``, or the environment variable GEARMODAL_STUDIES), imported as a module."""
     import importlib.util
     import os
     from pathlib import Path
 
-    base = Path(folder or os.environ.get("GEARMODAL_STUDIES")
-                or Path(__file__).resolve().parents[1] / "studies")
+    base = Path(folder or os.environ.get("GEARMODAL_STUDIES") or _library())
     path = base / f"{name.replace('-', '_')}.py"
     if not path.is_file():
         raise ModelError("--studies", f"= {str(base)!r}: no study script {path.name} there "
-                         "(the studies live in the source tree's studies/ folder)")
+                         "(the studies ship with gearmodal as gearmodal.library)")
     mod_name = f"gearmodal_study_{name.replace('-', '_')}"
     spec = importlib.util.spec_from_file_location(mod_name, path)
     mod = importlib.util.module_from_spec(spec)

@@ -98,3 +98,13 @@ def test_version(capsys):
     with pytest.raises(SystemExit) as e:
         main(["--version"])
     assert e.value.code == 0 and capsys.readouterr().out.strip() == f"gearmodal {gm.__version__}"
+
+
+def test_shipped_examples_are_found_by_name(tmp_path, monkeypatch, capsys):
+    """An installed gearmodal runs its examples without the source tree: a model or scene
+    given by name is the shipped one (gearmodal.library, pyproject.toml's package-dir)."""
+    monkeypatch.chdir(tmp_path)  # no studies/ folder here
+    assert main(["info", "600kw"]) == 0
+    assert "600kw: 13 bodies" in capsys.readouterr().out
+    assert main(["info", "no_such_model"]) == 2
+    assert "no_such_model" in capsys.readouterr().err
