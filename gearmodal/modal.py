@@ -19,6 +19,7 @@ import scipy.linalg as sla
 
 from .assembly import Assembly, as_assembly, reduction
 from .errors import ModelError
+from .frames import centre
 from .model.validate import plausible
 from .result_io import read_csv, read_header, write_header
 
@@ -46,6 +47,11 @@ class ModalResult:
         overrides by mode index.
     equilibrium : the static equilibrium (:class:`gearmodal.static.Equilibrium`) when loads
         were given, else None. contact_state : the contact states the modes belong to.
+    geometry : the bodies where they sit at azimuth 0 (index ``body``: ``x``, ``y`` (m),
+        ``radius`` (pitch radius of a gear, m; NaN otherwise), ``orientation`` (rad), ``role``
+        and the DOF names of the centre's local ``x``/``y`` and of the rotation, with the
+        rotation's scale), for drawing the modes (:meth:`body_motion`, :meth:`plot_shape`);
+        None for an assembly or coupled system given without its model.
     """
 
     speed_rpm: float
@@ -59,6 +65,7 @@ class ModalResult:
     model_name: str = ""
     equilibrium: object = None
     contact_state: np.ndarray | None = None
+    geometry: pd.DataFrame | None = None
 
     @property
     def n_modes(self) -> int:
@@ -83,10 +90,50 @@ class ModalResult:
         alignment)."""
         return pd.Series(_real_shape(self.shapes[:, i]), index=self.dof_names, name=f"mode {i}")
 
-    def plot_shape(self, i: int, ax=None):
-        """Bar chart of mode ``i``'s shape per DOF; returns the matplotlib Figure."""
+    def body_motion(self, i: int, scale: float | None = None) -> pd.DataFrame:
+        """Mode ``i`` as the motion of each body in the gearbox plane (global axes), from
+        :attr:`geometry` and the real, phase-aligned shape: ``x``, ``y``, ``radius``, the
+        centre's displacement ``dx``, ``dy`` (m) and the ``rotation`` (rad), all scaled by one
+        factor so that the largest motion (a centre's displacement, or a rotation times its
+        radius) is ``scale`` (m; default 15 % of the largest pitch radius, or of the bodies'
+        spread). Displacements: the local ``x``/``y`` turned by the body's orientation."""
+        g = self.geometry
+        if g is None:
+            raise ModelError("geometry", "this result has no model geometry (modal of an "
+                             "assembly or coupled system): use plot_shape(kind='bars')")
+        s = self.shape(i)
+
+        def val(name):
+            return float(s[name]) if isinstance(name, str) and name in s.index else 0.0
+
+        lx = np.array([val(n) for n in g.x_dof])
+        ly = np.array([val(n) for n in g.y_dof])
+        rot = np.array([val(n) / sc for n, sc in zip(g.rot_dof, g.rot_scale, strict=True)])
+        c, sn = np.cos(g.orientation.to_numpy()), np.sin(g.orientation.to_numpy())
+        dx, dy = c * lx - sn * ly, sn * lx + c * ly
+        size = np.nanmax(g.radius.to_numpy()) if np.isfinite(g.radius).any() else 0.0
+        spread = float(np.ptp(np.r_[g.x, g.y])) if len(g) else 0.0
+        ref = size if size > 0 else (spread if spread > 0 else 1.0)
+        # a rotation counts as the motion of its rim (the pitch circle, or ref), so that a
+        # torsional mode is drawn at the same scale as a translational one
+        rim = np.where(np.isfinite(g.radius.to_numpy()), g.radius.to_numpy(), ref)
+        big = max(float(np.hypot(dx, dy).max(initial=0.0)),
+                  float(np.abs(rim * rot).max(initial=0.0)), 1e-300)
+        k = (0.15 * ref if scale is None else scale) / big
+        return pd.DataFrame({"x": g.x, "y": g.y, "radius": g.radius, "dx": k * dx,
+                             "dy": k * dy, "rotation": k * rot}, index=g.index)
+
+    def plot_shape(self, i: int, ax=None, kind: str = "auto"):
+        """Mode ``i``: the gearbox drawn (``kind="geometry"``, the default when the model's
+        geometry is known: each gear as its pitch circle, other bodies as a dot, at rest in
+        grey and displaced by the mode in colour, its rotation as a turned radius) or a bar
+        chart of the shape per DOF (``kind="bars"``). Returns the matplotlib Figure."""
         import matplotlib.pyplot as plt
 
+        if kind not in ("auto", "geometry", "bars"):
+            raise ModelError("kind", f"= {kind!r}: must be 'auto', 'geometry' or 'bars'")
+        if kind == "geometry" or (kind == "auto" and self.geometry is not None):
+            return self._plot_geometry(i, ax)
         if ax is None:
             fig, ax = plt.subplots(figsize=(max(6.0, 0.18 * len(self.dof_names)), 3.2))
         else:
@@ -99,6 +146,37 @@ class ModalResult:
         typ = self.mode_types[i] if self.mode_types else ""
         ax.set_title(f"mode {i}: {self.frequencies_hz[i]:.3f} Hz {typ} "
                      f"({self.speed_rpm:g} rpm)")
+        fig.tight_layout()
+        return fig
+
+    def _plot_geometry(self, i: int, ax=None):
+        import matplotlib.pyplot as plt
+        from matplotlib.patches import Circle
+
+        m = self.body_motion(i)
+        if ax is None:
+            fig, ax = plt.subplots(figsize=(6.5, 6.5))
+        else:
+            fig = ax.figure
+        dot = 0.06 * (np.nanmax(m.radius) if np.isfinite(m.radius).any() else 1.0)
+        for name, r in m.iterrows():
+            rad = r.radius if np.isfinite(r.radius) else dot
+            ax.add_patch(Circle((r.x, r.y), rad, fill=False, color="0.75", lw=0.8))
+            cx, cy = r.x + r.dx, r.y + r.dy
+            ax.add_patch(Circle((cx, cy), rad, fill=False, color="C3", lw=1.2))
+            a = r.rotation
+            ax.plot([cx, cx + rad * math.cos(a)], [cy, cy + rad * math.sin(a)], color="C3",
+                    lw=1.0)
+            ax.annotate(str(name).rsplit(".", 1)[-1], (r.x, r.y), fontsize=6, color="0.4",
+                        ha="center", va="center")
+        ax.set_aspect("equal")
+        ax.autoscale_view()
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        typ = self.mode_types[i] if self.mode_types else ""
+        ax.set_title(f"mode {i}: {self.frequencies_hz[i]:.3f} Hz {typ} ({self.speed_rpm:g} rpm)"
+                     "\ngrey: at rest; red: displaced (scaled), rotation as a turned radius",
+                     fontsize=9)
         fig.tight_layout()
         return fig
 
@@ -121,6 +199,8 @@ class ModalResult:
                   "damping_ratios": self.damping_ratios}
         if self.contact_state is not None:
             arrays["contact_state"] = np.asarray(self.contact_state, dtype=bool)
+        if self.geometry is not None:
+            self.geometry.to_csv(d / "geometry.csv", index_label="body")
         np.savez_compressed(d / "modal.npz", **arrays)
         write_header(d, "ModalResult", SAVE_VERSION, dof_names=list(self.dof_names),
                      mode_types=list(self.mode_types), model=self.model_name,
@@ -141,11 +221,17 @@ class ModalResult:
         ke = read_csv(d / "kinetic_energy.csv", index_col="mode")
         se = read_csv(d / "strain_energy.csv", index_col="mode")
         ke.index.name = se.index.name = None  # as modal() makes them
+        geometry = None
+        if (d / "geometry.csv").is_file():
+            geometry = read_csv(d / "geometry.csv", index_col="body", keep_default_na=False,
+                                dtype={c: str for c in ("role", "x_dof", "y_dof", "rot_dof")})
+            geometry["radius"] = np.array([float(r) if r != "" else math.nan
+                                           for r in geometry["radius"].astype(str)])
         return cls(speed_rpm=head["speed_rpm"], frequencies_hz=arrays["frequencies_hz"],
                    damping_ratios=arrays["damping_ratios"], shapes=arrays["shapes"],
                    dof_names=list(head["dof_names"]), kinetic_energy=ke, strain_energy=se,
                    mode_types=list(head["mode_types"]), model_name=head["model"],
-                   contact_state=arrays.get("contact_state"))
+                   contact_state=arrays.get("contact_state"), geometry=geometry)
 
 
 def _real_shape(v: np.ndarray) -> np.ndarray:
@@ -242,7 +328,30 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     return ModalResult(speed_rpm=speed_rpm, frequencies_hz=freq, damping_ratios=zeta,
                        shapes=shapes, dof_names=list(asm.dof_names), kinetic_energy=ke,
                        strain_energy=se, mode_types=types, model_name=name,
-                       equilibrium=eq, contact_state=s)
+                       equilibrium=eq, contact_state=s, geometry=geometry_table(model))
+
+
+def geometry_table(model) -> pd.DataFrame | None:
+    """Where each body of a :class:`~gearmodal.Model` sits at azimuth 0 and which DOFs move
+    it (:attr:`ModalResult.geometry`); None for anything else."""
+    bodies = getattr(model, "bodies", None)
+    frames = getattr(model, "frames", None)
+    if not isinstance(bodies, dict) or not isinstance(frames, dict):
+        return None
+    rows = {}
+    for b in bodies.values():
+        c = centre(model, b, 0.0)
+        names = dict(zip(b.local_indices, b.coordinates, strict=True))
+        pre = f"{b.name}."
+        radius = getattr(b, "pitch_radius", None)
+        rows[b.name] = (float(c[0]), float(c[1]),
+                        float(radius) if radius is not None else math.nan,
+                        float(b.orientation), b.role,
+                        pre + names[0] if 0 in names else "", pre + names[1] if 1 in names
+                        else "", pre + names[5], float(b.rotation_scale or 1.0))
+    return pd.DataFrame(list(rows.values()), index=pd.Index(list(rows), name="body"),
+                        columns=["x", "y", "radius", "orientation", "role", "x_dof", "y_dof",
+                                 "rot_dof", "rot_scale"])
 
 
 def energies(asm: Assembly, shapes: np.ndarray, freq_hz: np.ndarray, state=None):

@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import gearmodal as gm
@@ -98,3 +99,32 @@ def test_modal_result_outputs(tmp_path):
     assert (tmp_path / "modes.csv").exists() and (tmp_path / "shapes.csv").exists()
     fig = res.plot_shape(3)
     assert fig.axes
+
+
+def test_mode_shapes_are_drawn_as_the_gearbox(tmp_path):
+    """plot_shape draws the bodies where they sit, displaced by the mode: a planet's centre
+    moves along its local zeta/eta turned by its orientation, every motion by one factor."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    stage = gm.examples.planetary_stage()
+    res = modal(stage)
+    i = 6
+    m = res.body_motion(i, scale=1.0)
+    s = res.shape(i)
+    planet = stage.bodies["planet2"]
+    c, sn = math.cos(planet.orientation), math.sin(planet.orientation)
+    zeta, eta = s["planet2.zeta"], s["planet2.eta"]
+    ratio = m.at["planet2", "dx"] / (c * zeta - sn * eta)
+    assert m.at["planet2", "dy"] == pytest.approx(ratio * (sn * zeta + c * eta), rel=1e-9)
+    assert m.at["sun", "rotation"] == pytest.approx(ratio * s["sun.theta"], rel=1e-9)
+    rim = np.where(np.isfinite(m.radius), m.radius, np.nanmax(m.radius))
+    motion = np.r_[np.hypot(m.dx, m.dy), np.abs(rim * m.rotation)]
+    assert motion.max() == pytest.approx(1.0, rel=1e-12)  # the largest motion is the scale
+    fig = res.plot_shape(i)
+    assert len(fig.axes[0].patches) == 2 * len(stage.bodies)  # at rest and displaced
+    res.save(tmp_path)
+    back = gm.ModalResult.load(tmp_path)
+    pd.testing.assert_frame_equal(back.body_motion(i), res.body_motion(i), check_exact=True)
+    with pytest.raises(gm.ModelError, match="no model geometry"):
+        modal(stage.assemble()).body_motion(0)
