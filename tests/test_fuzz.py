@@ -301,7 +301,7 @@ def test_malformed_input_is_refused_by_name_or_runs_clean(case, tmp_path, capsys
 
 #: tables that mark undefined values with NaN on purpose (shares of an unloaded stage)
 _NAN_ALLOWED = {"load_sharing.csv", "crossings.csv", "modes.csv", "double_contact.csv",
-                "elements.csv"}
+                "elements.csv", "geometry.csv"}
 
 
 def test_the_cases_cover_the_issues_examples():
