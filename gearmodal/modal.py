@@ -90,50 +90,80 @@ class ModalResult:
         alignment)."""
         return pd.Series(_real_shape(self.shapes[:, i]), index=self.dof_names, name=f"mode {i}")
 
-    def body_motion(self, i: int, scale: float | None = None) -> pd.DataFrame:
+    def body_motion(self, i: int, scale: float | None = None,
+                    phase_deg: float = 0.0) -> pd.DataFrame:
         """Mode ``i`` as the motion of each body in the gearbox plane (global axes), from
-        :attr:`geometry` and the real, phase-aligned shape: ``x``, ``y``, ``radius``, the
-        centre's displacement ``dx``, ``dy`` (m) and the ``rotation`` (rad), all scaled by one
-        factor so that the largest motion (a centre's displacement, or a rotation times its
-        radius) is ``scale`` (m; default 15 % of the largest pitch radius, or of the bodies'
-        spread). Displacements: the local ``x``/``y`` turned by the body's orientation."""
-        g = self.geometry
-        if g is None:
+        :attr:`geometry` and the phase-aligned shape at ``phase_deg`` of the cycle (the real
+        part of ``phi e^{i phase}``; 0: :meth:`shape`): ``x``, ``y``, ``radius``, the centre's
+        displacement ``dx``, ``dy`` (m) and the ``rotation`` (rad), all scaled by one factor
+        so that the largest motion over the cycle (a centre's displacement, or a rotation
+        times its radius) is ``scale`` (m; default 15 % of the largest pitch radius, or of
+        the bodies' spread). Displacements: the local ``x``/``y`` turned by the body's
+        orientation."""
+        g = self._geometry()
+        dx, dy, rot = self._motion(i, np.exp(1j * math.radians(phase_deg)))
+        k = (0.15 * self._size() if scale is None else scale) / self._largest_motion(i)
+        return pd.DataFrame({"x": g.x, "y": g.y, "radius": g.radius, "dx": k * dx,
+                             "dy": k * dy, "rotation": k * rot}, index=g.index)
+
+    def _geometry(self) -> pd.DataFrame:
+        if self.geometry is None:
             raise ModelError("geometry", "this result has no model geometry (modal of an "
                              "assembly or coupled system): use plot_shape(kind='bars')")
-        s = self.shape(i)
+        return self.geometry
+
+    def _size(self) -> float:
+        """The drawing's reference length: the largest pitch radius, or the bodies' spread."""
+        g = self._geometry()
+        size = np.nanmax(g.radius.to_numpy()) if np.isfinite(g.radius).any() else 0.0
+        spread = float(np.ptp(np.r_[g.x, g.y])) if len(g) else 0.0
+        return size if size > 0 else (spread if spread > 0 else 1.0)
+
+    def _motion(self, i: int, turn: complex = 1.0):
+        """Unscaled global ``dx``, ``dy`` and ``rotation`` of each body for the phase-aligned
+        complex shape times ``turn`` (real part)."""
+        g = self._geometry()
+        v = self.shapes[:, i]
+        j = int(np.argmax(np.abs(v)))
+        aligned = v * np.conj(v[j]) / np.abs(v[j]) if np.abs(v[j]) > 0 else v
+        s = dict(zip(self.dof_names, np.real(aligned * turn), strict=True))
 
         def val(name):
-            return float(s[name]) if isinstance(name, str) and name in s.index else 0.0
+            return float(s[name]) if isinstance(name, str) and name in s else 0.0
 
         lx = np.array([val(n) for n in g.x_dof])
         ly = np.array([val(n) for n in g.y_dof])
         rot = np.array([val(n) / sc for n, sc in zip(g.rot_dof, g.rot_scale, strict=True)])
         c, sn = np.cos(g.orientation.to_numpy()), np.sin(g.orientation.to_numpy())
-        dx, dy = c * lx - sn * ly, sn * lx + c * ly
-        size = np.nanmax(g.radius.to_numpy()) if np.isfinite(g.radius).any() else 0.0
-        spread = float(np.ptp(np.r_[g.x, g.y])) if len(g) else 0.0
-        ref = size if size > 0 else (spread if spread > 0 else 1.0)
-        # a rotation counts as the motion of its rim (the pitch circle, or ref), so that a
-        # torsional mode is drawn at the same scale as a translational one
-        rim = np.where(np.isfinite(g.radius.to_numpy()), g.radius.to_numpy(), ref)
-        big = max(float(np.hypot(dx, dy).max(initial=0.0)),
-                  float(np.abs(rim * rot).max(initial=0.0)), 1e-300)
-        k = (0.15 * ref if scale is None else scale) / big
-        return pd.DataFrame({"x": g.x, "y": g.y, "radius": g.radius, "dx": k * dx,
-                             "dy": k * dy, "rotation": k * rot}, index=g.index)
+        return c * lx - sn * ly, sn * lx + c * ly, rot
 
-    def plot_shape(self, i: int, ax=None, kind: str = "auto"):
+    def _largest_motion(self, i: int) -> float:
+        """The largest motion of mode ``i`` over its cycle (centre displacement, or rotation
+        times the rim radius, so a torsional mode is drawn at the scale of a translational
+        one), sampled at 36 phases."""
+        g = self._geometry()
+        r = g.radius.to_numpy()
+        rim = np.where(np.isfinite(r), r, self._size())
+        big = 1e-300
+        for ph in np.linspace(0.0, np.pi, 36, endpoint=False):
+            dx, dy, rot = self._motion(i, np.exp(1j * ph))
+            big = max(big, float(np.hypot(dx, dy).max(initial=0.0)),
+                      float(np.abs(rim * rot).max(initial=0.0)))
+        return big
+
+    def plot_shape(self, i: int, ax=None, kind: str = "auto", phase_deg: float = 0.0):
         """Mode ``i``: the gearbox drawn (``kind="geometry"``, the default when the model's
-        geometry is known: each gear as its pitch circle, other bodies as a dot, at rest in
-        grey and displaced by the mode in colour, its rotation as a turned radius) or a bar
-        chart of the shape per DOF (``kind="bars"``). Returns the matplotlib Figure."""
+        geometry is known; one panel per stage: each gear as its pitch circle, the carrier's
+        arms to its planets, the housing as a square, other bodies as a dot, at rest in grey
+        and displaced by the mode in colour at ``phase_deg`` of its cycle, each rotation as a
+        turned radius) or a bar chart of the shape per DOF (``kind="bars"``). Returns the
+        matplotlib Figure (:meth:`animate_shape` writes the cycle as a GIF)."""
         import matplotlib.pyplot as plt
 
         if kind not in ("auto", "geometry", "bars"):
             raise ModelError("kind", f"= {kind!r}: must be 'auto', 'geometry' or 'bars'")
         if kind == "geometry" or (kind == "auto" and self.geometry is not None):
-            return self._plot_geometry(i, ax)
+            return self._plot_geometry(i, ax, phase_deg)
         if ax is None:
             fig, ax = plt.subplots(figsize=(max(6.0, 0.18 * len(self.dof_names)), 3.2))
         else:
@@ -143,42 +173,118 @@ class ModalResult:
         ax.set_xticks(range(len(s)))
         ax.set_xticklabels(s.index, rotation=90, fontsize=6)
         ax.set_ylabel("normalised amplitude")
-        typ = self.mode_types[i] if self.mode_types else ""
-        ax.set_title(f"mode {i}: {self.frequencies_hz[i]:.3f} Hz {typ} "
-                     f"({self.speed_rpm:g} rpm)")
+        ax.set_title(self._title(i))
         fig.tight_layout()
         return fig
 
-    def _plot_geometry(self, i: int, ax=None):
+    def animate_shape(self, i: int, path, frames: int = 24, fps: int = 12) -> Path:
+        """Write mode ``i`` moving through one cycle (``frames`` phases, drawn as
+        :meth:`plot_shape`) as an animated GIF at ``path`` (Pillow, matplotlib's own
+        dependency). Returns the path."""
         import matplotlib.pyplot as plt
-        from matplotlib.patches import Circle
+        from matplotlib.animation import FuncAnimation, PillowWriter
 
-        m = self.body_motion(i)
-        if ax is None:
-            fig, ax = plt.subplots(figsize=(6.5, 6.5))
-        else:
-            fig = ax.figure
-        dot = 0.06 * (np.nanmax(m.radius) if np.isfinite(m.radius).any() else 1.0)
-        for name, r in m.iterrows():
-            rad = r.radius if np.isfinite(r.radius) else dot
-            ax.add_patch(Circle((r.x, r.y), rad, fill=False, color="0.75", lw=0.8))
-            cx, cy = r.x + r.dx, r.y + r.dy
-            ax.add_patch(Circle((cx, cy), rad, fill=False, color="C3", lw=1.2))
-            a = r.rotation
-            ax.plot([cx, cx + rad * math.cos(a)], [cy, cy + rad * math.sin(a)], color="C3",
-                    lw=1.0)
-            ax.annotate(str(name).rsplit(".", 1)[-1], (r.x, r.y), fontsize=6, color="0.4",
-                        ha="center", va="center")
-        ax.set_aspect("equal")
-        ax.autoscale_view()
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        if not (isinstance(frames, int) and 2 <= frames <= 360):
+            raise ModelError("frames", f"= {frames!r}: must be an integer from 2 to 360")
+        if not (isinstance(fps, int) and 1 <= fps <= 60):
+            raise ModelError("fps", f"= {fps!r}: must be an integer from 1 to 60")
+        path = Path(path)
+        fig = self._plot_geometry(i, None, 0.0)
+
+        def draw(k):
+            for ax in fig.axes:
+                ax.clear()
+            self._draw(i, fig.axes, 360.0 * k / frames)
+            return []
+
+        anim = FuncAnimation(fig, draw, frames=frames, blit=False)
+        anim.save(path, writer=PillowWriter(fps=fps), dpi=80)
+        plt.close(fig)
+        return path
+
+    def _title(self, i: int) -> str:
         typ = self.mode_types[i] if self.mode_types else ""
-        ax.set_title(f"mode {i}: {self.frequencies_hz[i]:.3f} Hz {typ} ({self.speed_rpm:g} rpm)"
-                     "\ngrey: at rest; red: displaced (scaled), rotation as a turned radius",
-                     fontsize=9)
+        return f"mode {i}: {self.frequencies_hz[i]:.3f} Hz {typ} ({self.speed_rpm:g} rpm)"
+
+    def _panels(self) -> list[list[str]]:
+        """The bodies drawn together: one panel per stage (the name's prefix before the
+        first '.'); the housing in every panel, the other bodies of no stage (rotor,
+        generator) in the first."""
+        g = self._geometry()
+        names = list(g.index)
+        stages = list(dict.fromkeys(n.split(".", 1)[0] for n in names if "." in n))
+        if not stages:
+            return [names]
+        house = [n for n in names if "." not in n and g.role[n] == "housing"]
+        free = [n for n in names if "." not in n and n not in house]
+        return [(house + free if k == 0 else house)
+                + [n for n in names if n.startswith(st + ".")] for k, st in enumerate(stages)]
+
+    def _plot_geometry(self, i: int, ax=None, phase_deg: float = 0.0):
+        import matplotlib.pyplot as plt
+
+        panels = self._panels()
+        if ax is None:
+            n = len(panels)
+            fig, axs = plt.subplots(1, n, figsize=(min(5.0 * n, 15.0), 5.4), squeeze=False)
+            axes = list(axs[0])
+        else:
+            fig, axes = ax.figure, [ax]
+        self._draw(i, axes, phase_deg)
         fig.tight_layout()
         return fig
+
+    def _draw(self, i: int, axes, phase_deg: float) -> None:
+        from matplotlib.patches import Circle, Rectangle
+
+        m = self.body_motion(i, phase_deg=phase_deg)
+        roles = self._geometry().role
+        panels = self._panels() if len(axes) > 1 else [list(m.index)]
+        for ax, names in zip(axes, panels, strict=False):
+            sub = m.loc[names]
+            size = np.nanmax(sub.radius) if np.isfinite(sub.radius).any() else self._size()
+            dot = 0.06 * size
+            for name, r in sub.iterrows():
+                cx, cy = r.x + r.dx, r.y + r.dy
+                if roles[name] == "housing":  # the housing: a square around the panel
+                    h = 1.15 * size
+                    ax.add_patch(Rectangle((r.x - h, r.y - h), 2 * h, 2 * h, fill=False,
+                                           color="0.8", lw=0.8))
+                    ax.add_patch(Rectangle((cx - h, cy - h), 2 * h, 2 * h, fill=False,
+                                           color="C0", lw=1.0, ls="--"))
+                    continue
+                rad = r.radius if np.isfinite(r.radius) else dot
+                ax.add_patch(Circle((r.x, r.y), rad, fill=False, color="0.75", lw=0.8))
+                ax.add_patch(Circle((cx, cy), rad, fill=False, color="C3", lw=1.2))
+                a = r.rotation
+                ax.plot([cx, cx + rad * math.cos(a)], [cy, cy + rad * math.sin(a)],
+                        color="C3", lw=1.0)
+                ax.annotate(str(name).rsplit(".", 1)[-1], (r.x, r.y), fontsize=6,
+                            color="0.4", ha="center", va="center")
+            carriers = [n for n in names if roles[n] == "carrier"]
+            for c in carriers:  # the carrier's arms to its planets' centres
+                prefix = c.rsplit(".", 1)[0] + "." if "." in c else ""
+                cr = m.loc[c]
+                for p in names:
+                    if roles[p] == "planet" and p.startswith(prefix):
+                        pr = m.loc[p]
+                        ax.plot([cr.x, pr.x], [cr.y, pr.y], color="0.8", lw=2.5, zorder=0)
+                        ax.plot([cr.x + cr.dx, pr.x + pr.dx], [cr.y + cr.dy, pr.y + pr.dy],
+                                color="C1", lw=2.0, alpha=0.7, zorder=0)
+            ax.set_aspect("equal")
+            ax.relim()
+            ax.autoscale_view()
+            pad = 1.3 * size
+            xs, ys = sub.x.to_numpy(), sub.y.to_numpy()
+            ax.set_xlim(xs.min() - pad, xs.max() + pad)
+            ax.set_ylim(ys.min() - pad, ys.max() + pad)
+            ax.set_xlabel("x [m]")
+            ax.set_ylabel("y [m]")
+            stage = next((n.split(".", 1)[0] for n in names if "." in n), "")
+            ax.set_title(stage, fontsize=9)
+        axes[0].figure.suptitle(self._title(i) + "\ngrey: at rest; colour: displaced (scaled), "
+                                "rotation as a turned radius, carrier arms in orange",
+                                fontsize=9)
 
     def save(self, directory) -> Path:
         """Write ``modes.csv``, ``shapes.csv`` (real, phase-aligned), ``kinetic_energy.csv``,

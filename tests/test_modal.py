@@ -128,3 +128,30 @@ def test_mode_shapes_are_drawn_as_the_gearbox(tmp_path):
     pd.testing.assert_frame_equal(back.body_motion(i), res.body_motion(i), check_exact=True)
     with pytest.raises(gm.ModelError, match="no model geometry"):
         modal(stage.assemble()).body_motion(0)
+
+
+def test_mode_shape_cycle_and_animation(tmp_path):
+    """body_motion over the cycle is Re(phi e^{i phase}) at one scale: half a cycle later every
+    motion is reversed, and a real (undamped, non-rotating) mode passes through rest at a
+    quarter; animate_shape writes a GIF of that cycle with one frame per phase."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from PIL import Image
+
+    stage = gm.examples.planetary_stage()
+    res = modal(stage)
+    i = 6
+    m0, m180 = res.body_motion(i), res.body_motion(i, phase_deg=180.0)
+    for col in ("dx", "dy", "rotation"):
+        np.testing.assert_allclose(m180[col], -m0[col], atol=1e-15 * np.abs(m0[col]).max())
+        assert np.abs(res.body_motion(i, phase_deg=90.0)[col]).max() < 1e-12 * np.abs(
+            m0[col]).max()
+    fig = res.plot_shape(i)
+    arms = [ln for ln in fig.axes[0].lines if ln.get_color() == "C1"]
+    assert len(arms) == 3  # the carrier's arms to its three planets, displaced
+    path = res.animate_shape(i, tmp_path / "mode.gif", frames=8, fps=4)
+    with Image.open(path) as gif:
+        assert gif.format == "GIF" and gif.n_frames == 8
+    with pytest.raises(gm.ModelError, match="frames"):
+        res.animate_shape(i, tmp_path / "x.gif", frames=1)
