@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import shipped
 from .errors import ModelError
 from .model.validate import plausible
 
@@ -71,24 +72,14 @@ def _loads(args, model) -> dict | None:
     return loads or None
 
 
-def _library() -> Path:
-    """The folder of the shipped studies and example files: the installed
-    ``gearmodal.library`` (the source tree's ``studies/``, mapped there by pyproject.toml)."""
-    try:
-        import gearmodal.library as lib
-    except ImportError:  # run from a source tree that was never installed
-        return Path(__file__).resolve().parents[1] / "studies"
-    return Path(lib.__file__).resolve().parent
-
-
 def _named(path: str, kind: str) -> str:
     """A file given by its path, or a shipped example by its name (``600kw``: the model
-    ``models/600kw.toml`` of :func:`_library`)."""
+    ``models/600kw.toml`` of :func:`gearmodal.shipped.folder`)."""
     p = Path(path)
     if p.exists() or p.suffix or not path:
         return path
-    shipped = _library() / kind / f"{path}.toml"
-    return str(shipped) if shipped.is_file() else path
+    found = shipped.find(path, kind)
+    return str(found) if found is not None else path
 
 
 def _load(path: str):
@@ -215,13 +206,13 @@ STUDIES = ("double-contact", "gravity-torque", "mounting-azimuth", "clearance-ma
 
 
 def _study_module(name: str, folder: str | None):
-    """The study script ``<name>.py`` shipped with gearmodal (:func:`_library`; or
+    """The study script ``<name>.py`` shipped with gearmodal (:func:`gearmodal.shipped.folder`; or
     ``--studies DIR``, or the environment variable GEARMODAL_STUDIES), imported as a module."""
     import importlib.util
     import os
     from pathlib import Path
 
-    base = Path(folder or os.environ.get("GEARMODAL_STUDIES") or _library())
+    base = Path(folder or os.environ.get("GEARMODAL_STUDIES") or shipped.folder())
     path = base / f"{name.replace('-', '_')}.py"
     if not path.is_file():
         raise ModelError("--studies", f"= {str(base)!r}: no study script {path.name} there "
@@ -260,6 +251,17 @@ def cmd_study(args) -> int:
     with __import__("pandas").option_context("display.width", 160, "display.max_columns", 8):
         print(summary)
     print(f"wrote {args.out}/summary.csv and report.html")
+    return 0
+
+
+def cmd_docs_figures(args) -> int:
+    from .figures import check_out, docs_figures
+
+    out = check_out(args.out)
+    written = docs_figures(out, quick=args.quick, work=args.work,
+                           progress=None if args.quiet else
+                           lambda name, s: print(f"  {name}: {s:.1f} s", flush=True))
+    print(f"wrote {len(written)} figures into {out}")
     return 0
 
 
@@ -322,6 +324,15 @@ def build_parser() -> argparse.ArgumentParser:
                     "tree's studies/)")
     st.add_argument("--quiet", action="store_true", help="no progress bar")
     st.set_defaults(func=cmd_study)
+    d = sub.add_parser("docs-figures", help="write every figure of the documentation "
+                       "(docs/ in the source tree), each by the command a user would run")
+    d.add_argument("--out", required=True, type=_out_folder, help="output folder (docs)")
+    d.add_argument("--quick", action="store_true", help="short runs and coarse grids (a "
+                   "minute; checks that every figure is still written, not for docs/)")
+    d.add_argument("--work", type=_out_folder, help="folder for the commands' own outputs "
+                   "(default: a temporary one; given, a rerun resumes the studies)")
+    d.add_argument("--quiet", action="store_true", help="no progress lines")
+    d.set_defaults(func=cmd_docs_figures)
     i = sub.add_parser("info", help="model summary and DOF names")
     i.add_argument("model")
     i.set_defaults(func=cmd_info)

@@ -177,10 +177,11 @@ class ModalResult:
         fig.tight_layout()
         return fig
 
-    def animate_shape(self, i: int, path, frames: int = 24, fps: int = 12) -> Path:
+    def animate_shape(self, i: int, path, frames: int = 24, fps: int = 12,
+                      dpi: int = 80) -> Path:
         """Write mode ``i`` moving through one cycle (``frames`` phases, drawn as
         :meth:`plot_shape`) as an animated GIF at ``path`` (Pillow, matplotlib's own
-        dependency). Returns the path."""
+        dependency; ``dpi`` sets its size). Returns the path."""
         import matplotlib.pyplot as plt
         from matplotlib.animation import FuncAnimation, PillowWriter
 
@@ -198,7 +199,7 @@ class ModalResult:
             return []
 
         anim = FuncAnimation(fig, draw, frames=frames, blit=False)
-        anim.save(path, writer=PillowWriter(fps=fps), dpi=80)
+        anim.save(path, writer=PillowWriter(fps=fps), dpi=dpi)
         plt.close(fig)
         return path
 

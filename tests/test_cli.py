@@ -108,3 +108,24 @@ def test_shipped_examples_are_found_by_name(tmp_path, monkeypatch, capsys):
     assert "600kw: 13 bodies" in capsys.readouterr().out
     assert main(["info", "no_such_model"]) == 2
     assert "no_such_model" in capsys.readouterr().err
+
+
+def test_python_dash_m_runs_the_command_line():
+    """``python -m gearmodal`` is the command line (docs-figures runs each figure's command
+    so, in a fresh process)."""
+    import subprocess
+    import sys
+
+    import gearmodal as gm
+
+    out = subprocess.run([sys.executable, "-m", "gearmodal", "--version"], capture_output=True,
+                         text=True, check=True).stdout
+    assert out.strip() == f"gearmodal {gm.__version__}"
+
+
+def test_docs_figures_refuses_a_file_as_out(tmp_path, capsys):
+    f = tmp_path / "f"
+    f.write_text("x")
+    with pytest.raises(SystemExit) as e:
+        main(["docs-figures", "--out", str(f)])
+    assert e.value.code == 2 and "is a file, not a folder" in capsys.readouterr().err

@@ -1,0 +1,147 @@
+"""Every figure of the documentation, written by one command: ``gearmodal docs-figures --out
+docs`` (issue 23).
+
+Each figure is what a user's own command writes (``gearmodal campbell 600kw``, ``gearmodal
+simulate gear_rattle``, ``gearmodal study double-contact``, ...), run in a fresh process into
+a work folder and copied under the name the documentation uses; the mode-shape drawings come
+from :meth:`gearmodal.ModalResult.plot_shape` and :meth:`~gearmodal.ModalResult.animate_shape`.
+``quick=True`` runs the same commands on short runs and coarse grids (seconds instead of
+minutes; CI checks that every figure is still written), into a folder that is not ``docs/``.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import shipped
+from .errors import ModelError
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One documentation figure: ``name`` in the docs folder, the ``gearmodal`` command that
+    writes it (``args``, with ``quick`` added for a quick run) and the file it writes there."""
+
+    name: str
+    args: tuple[str, ...]
+    writes: str
+    quick: tuple[str, ...] = ()
+
+
+#: the figures of docs/ (the README's are among them), in the order they are made
+FIGURES: tuple[Figure, ...] = (
+    Figure("600kw_campbell.png", ("campbell", "600kw"), "campbell.png",
+           ("--speeds", "0:30:5")),
+    Figure("600kw_campbell_low.png", ("campbell", "600kw"), "campbell_low.png",
+           ("--speeds", "0:30:5")),
+    Figure("gear_rattle_forces.png", ("simulate", "gear_rattle"), "forces.png",
+           ("--t-end", "0.02")),
+    Figure("planetary_double_contact_forces.png", ("simulate", "planetary_double_contact"),
+           "forces.png", ("--t-end", "0.03")),
+    Figure("600kw_turbine_drivetrain.png", ("simulate", "600kw_turbine_10ms"),
+           "drivetrain.png", ("--t-end", "1")),
+    Figure("double_contact_clearance.png", ("study", "double-contact"),
+           "tooth_forces_clearance.png", ("--duration", "1")),
+    Figure("gravity_torque.png", ("study", "gravity-torque"), "planet_forces.png",
+           ("--step", "30")),
+    Figure("mounting_azimuth.png", ("study", "mounting-azimuth", "--seeds", "3"),
+           "mounting_azimuth.png", ("--duration", "1", "--step", "60", "--seeds", "1")),
+    Figure("clearance_map.png", ("study", "clearance-map"), "clearance_map.png",
+           ("--duration", "0.02")),
+)
+
+#: the mode-shape drawings: (file name, model, mode index at rated speed, animated too); the
+#: housing translation near 10 Hz and a translational mode of the planetary stage
+MODE_SHAPES: tuple[tuple[str, str, int, bool], ...] = (
+    ("600kw_mode_housing", "600kw", 2, True),
+    ("600kw_mode_planetary", "600kw", 7, False),
+)
+
+
+def _run(argv: list[str], log: Path) -> None:
+    with open(log, "w") as f:
+        rc = subprocess.run([sys.executable, "-m", "gearmodal", *argv], stdout=f,
+                            stderr=subprocess.STDOUT).returncode
+    if rc:
+        tail = log.read_text().strip().splitlines()[-1:] or [""]
+        raise RuntimeError(f"gearmodal {' '.join(argv)} failed (exit {rc}): {tail[0]}")
+
+
+def mode_shapes(out: Path, frames: int = 16) -> list[Path]:
+    """Draw :data:`MODE_SHAPES` (a PNG each, and the animated ones as a GIF) into ``out``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .modal import modal
+    from .model.toml_io import load
+
+    written = []
+    for name, model_name, i, animated in MODE_SHAPES:
+        model = load(shipped.find(model_name, "models"))
+        res = modal(model, speed_rpm=model.rated_speed_rpm or 0.0)
+        fig = res.plot_shape(i)
+        fig.savefig(out / f"{name}.png", dpi=110)
+        plt.close(fig)
+        written.append(out / f"{name}.png")
+        if animated:
+            written.append(res.animate_shape(i, out / f"{name}.gif", frames=frames, dpi=60))
+    return written
+
+
+def docs_figures(out, *, quick: bool = False, work=None, progress=None) -> list[Path]:
+    """Write every documentation figure (:data:`FIGURES`, :data:`MODE_SHAPES`) into ``out``
+    (the source tree's ``docs/`` for the real ones). ``quick``: short runs and coarse grids,
+    for checking that every command still writes its figure. ``work``: the folder the
+    commands write into (default: a temporary one; given, a rerun resumes the studies from
+    their stores). ``progress(name, seconds)`` is called after each figure. Returns the paths
+    written."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = None
+    if work is None:
+        tmp = tempfile.TemporaryDirectory(prefix="gearmodal-figures-")
+        work = tmp.name
+    work = Path(work)
+    work.mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    try:
+        done: dict[tuple[str, ...], Path] = {}
+        for fig in FIGURES:
+            t0 = time.perf_counter()
+            argv = [*fig.args, *(fig.quick if quick else ())]
+            key = tuple(argv)
+            if key not in done:  # one run writes several figures (the Campbell pair)
+                folder = work / "_".join(a.strip("-").replace(":", "-") for a in argv)
+                _run([*argv, "--out", str(folder), "--quiet"], work / f"{folder.name}.log")
+                done[key] = folder
+            src = done[key] / fig.writes
+            if not src.is_file():
+                raise RuntimeError(f"gearmodal {' '.join(argv)} did not write {fig.writes}")
+            shutil.copyfile(src, out / fig.name)
+            written.append(out / fig.name)
+            if progress:
+                progress(fig.name, time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        written += mode_shapes(out, frames=8 if quick else 16)
+        if progress:
+            progress("mode shapes", time.perf_counter() - t0)
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+    return written
+
+
+def check_out(out) -> Path:
+    """``--out`` of docs-figures: a folder, not a file."""
+    p = Path(out)
+    if p.exists() and not p.is_dir():
+        raise ModelError("--out", f"= {str(out)!r} is a file, not a folder")
+    return p
