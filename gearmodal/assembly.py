@@ -27,6 +27,7 @@ import pandas as pd
 
 from .errors import ModelError
 from .frames import body_transform, centre, skew
+from .model.components import GRAVITY
 from .model.mesh_stiffness import MeshVariation
 
 
@@ -422,6 +423,15 @@ def assemble(model, azimuth: float = 0.0) -> Assembly:
                 col[slices[b.name]] *= b.rotation_scale
             load_names.append(lname)
             cols.append(col)
+    # gravity (the load "gravity", value g in m/s^2): every body's weight at its centre,
+    # sum_b m_b T_b^T d with d the ground-axes direction (model.gravity_direction); in a
+    # turning frame T_b turns with the azimuth, so the weight is a rotating load there
+    d = np.array([*model.gravity_direction, 0.0, 0.0, 0.0])
+    col = np.zeros(n)
+    for b in bodies:
+        col[slices[b.name]] += b.mass * (d @ ctx.transform(b))
+    load_names.append(GRAVITY)
+    cols.append(col)
     B = np.array(cols).T if cols else np.zeros((n, 0))
     contacts = ctx.contacts.contacts(ctx.kinds, n)
     springs = ctx.springs.contacts("spring", n)

@@ -27,7 +27,7 @@ def test_gear_base_radius_spur_and_helical():
 def test_gear_pair_names_and_loads():
     m = pair()
     assert m.dof_names == ["pinion.theta", "wheel.theta"]
-    assert m.load_names == ["pinion.torque", "wheel.torque"]
+    assert m.load_names == ["pinion.torque", "wheel.torque", "gravity"]
     mp = pair("planar", bearing_stiffness=1e9)
     assert mp.dof_names == ["pinion.x", "pinion.y", "pinion.theta", "wheel.x", "wheel.y",
                             "wheel.theta"]

@@ -164,7 +164,8 @@ def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
 
 def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing: dict,
                      torsional: dict, mesh: dict, pressure_angle, planet_angles=None, *,
-                     backlash: float = 0.0, mesh_damping: float = 0.0) -> Model:
+                     backlash: float = 0.0, mesh_damping: float = 0.0, pin_errors=None,
+                     tooth_thickness_errors=None) -> Model:
     """Lin & Parker (1999) planar planetary stage in the frame rotating with the carrier.
 
     Parameters (SI, Lin & Parker's convention)
@@ -181,6 +182,9 @@ def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing:
     pressure_angle : rad, a number or a table ``sun_planet``, ``ring_planet``.
     planet_angles : planet positions ``psi_n`` in rad (default equally spaced from 0).
     backlash : m, both meshes (the back flanks; 0 = none). mesh_damping : N s/m.
+    pin_errors : per planet ``[radial_m, tangential_m]``, the carrier pinhole position error
+        (the planet's ``position_error``). tooth_thickness_errors : per planet, m along the
+        line of action (positive: thicker; each of its flanks closes by half of it).
 
     DOFs are ``carrier.x, carrier.y, carrier.u, ring.x, ..., sun.u, planet1.zeta, planet1.eta,
     planet1.u, ...`` with ``zeta``/``eta`` the planet's radial/tangential displacement and ``u``
@@ -212,6 +216,8 @@ def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing:
     a_r = v.angle("lin_parker_stage.pressure_angle.ring_planet", a_r, low=1e-6,
                   high=math.pi / 3)
     psi = _planet_angles("lin_parker_stage.planet_angles", planet_angles, n_planets)
+    errors = _errors("lin_parker_stage", n_planets, pin_errors, tooth_thickness_errors)
+    _check_backlash("lin_parker_stage", backlash, errors)
 
     # Radii cancel from Lin & Parker's matrices (u = r theta, I / r^2); pick a consistent
     # geometry: pin radius 1 m, planet base radius 1/4 m, sun and ring base radii from the
@@ -231,7 +237,8 @@ def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing:
                         inertia=_iorr("planet", inertia_over_r2["planet"], r_p),
                         dofs="planar", frame="carrier", rotation_scale=r_p, speed_ratio=1.0,
                         position=(r_c * math.cos(p), r_c * math.sin(p), 0.0), orientation=p,
-                        coordinate_names={"x": "zeta", "y": "eta"}, role="planet"))
+                        coordinate_names={"x": "zeta", "y": "eta"}, role="planet",
+                        **errors[n - 1]))
     for b in _CENTRAL:
         k = v.nonnegative(f"lin_parker_stage.bearing.{b}", bearing[b], "N/m")
         ku = v.nonnegative(f"lin_parker_stage.torsional.{b}", torsional[b], "N/m")
@@ -253,6 +260,41 @@ def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing:
                    internal=True, role="ring_planet", planet=pl))
     m.groups["planets"] = [f"planet{n}" for n in range(1, n_planets + 1)]
     return m.check()
+
+
+def _errors(name: str, n: int, pin_errors, tooth_thickness_errors) -> list[dict]:
+    """Per planet: ``position_error`` (radial, tangential pinhole error, m) and
+    ``thickness_error`` (m) from the builders' ``pin_errors`` and ``tooth_thickness_errors``
+    (None: no errors), each given for every planet."""
+    out = [{} for _ in range(n)]
+    if pin_errors is not None:
+        f = f"{name}.pin_errors"
+        if not isinstance(pin_errors, (list, tuple)) or len(pin_errors) != n:
+            raise ModelError(f, f"= {pin_errors!r}: expected one [radial_m, tangential_m] "
+                             f"per planet ({n})")
+        for i, e in enumerate(pin_errors):
+            if not isinstance(e, (list, tuple)) or len(e) != 2:
+                raise ModelError(f"{f}[{i}]", f"= {e!r}: expected [radial_m, tangential_m]")
+            out[i]["position_error"] = tuple(v.plausible(f"{f}[{i}]", v.number(
+                f"{f}[{i}]", x, "m"), "gap") for x in e)
+    if tooth_thickness_errors is not None:
+        f = f"{name}.tooth_thickness_errors"
+        if not isinstance(tooth_thickness_errors, (list, tuple)) \
+                or len(tooth_thickness_errors) != n:
+            raise ModelError(f, f"= {tooth_thickness_errors!r}: expected one value (m) per "
+                             f"planet ({n})")
+        for i, t in enumerate(tooth_thickness_errors):
+            out[i]["thickness_error"] = v.plausible(f"{f}[{i}]", v.number(f"{f}[{i}]", t, "m"),
+                                                    "gap")
+    return out
+
+
+def _check_backlash(name: str, backlash: float, errors: list[dict]) -> None:
+    for i, e in enumerate(errors):
+        t = e.get("thickness_error", 0.0)
+        if t > 0.0 and t > backlash:
+            raise ModelError(f"{name}.tooth_thickness_errors[{i}]", f"= {t!r} m: thicker than "
+                             f"the backlash ({backlash!r} m) allows; the teeth would jam")
 
 
 def _iorr(field: str, value, r: float) -> float:
@@ -299,7 +341,8 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
                     planet_bearing=None, carrier_bearing=None, sun_support=None,
                     ring_support=None, dofs: str = "planar", planet_angles=None,
                     carrier_inertia_diametral: float | None = None,
-                    name: str = "planetary_stage", mesh_alternation=None) -> Model:
+                    name: str = "planetary_stage", mesh_alternation=None, pin_errors=None,
+                    tooth_thickness_errors=None) -> Model:
     """A planetary stage with carrier input and the ring held (the wind-turbine layout).
 
     Parameters
@@ -319,6 +362,10 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         ``stiffness_ratio``: every mesh alternates between single and double tooth-pair
         contact at the mesh frequency (:class:`Mesh`), planet n's meshes phased by the planet
         spacing (Parker & Lin 2004); the sun-ring phase is taken as 0.
+    pin_errors : per planet ``[radial_m, tangential_m]``: the carrier pinhole position error
+        (the planet's ``position_error``; tangential positive in the sense of the carrier's
+        positive rotation). tooth_thickness_errors : per planet, m along the line of action
+        (positive: thicker; each of its flanks closes by half of it, the backlash by all).
 
     Notes
     -----
@@ -346,6 +393,8 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
                          f"spaced, (sun + ring teeth) = {s.teeth + r.teeth} is not divisible "
                          f"by {n_planets}; give planet_angles")
     psi = _planet_angles(f"{name}.planet_angles", planet_angles, n_planets)
+    errors = _errors(name, n_planets, pin_errors, tooth_thickness_errors)
+    _check_backlash(name, backlash, errors)
     if isinstance(mesh_stiffness, dict):
         k_sp = mesh_stiffness.get("sun_planet")
         k_rp = mesh_stiffness.get("ring_planet")
@@ -374,6 +423,8 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         pl.coordinate_names = {"x": "zeta", "y": "eta"}
         pl.pinned_to = "carrier"  # a torsional planet rides on its carrier pin
         pl.role = "planet"
+        pl.position_error = errors[n - 1].get("position_error", (0.0, 0.0))
+        pl.thickness_error = errors[n - 1].get("thickness_error", 0.0)
         m.add(pl)
     for label, spec, body in (("carrier_bearing", carrier_bearing, "carrier"),
                               ("sun_support", sun_support, "sun"),

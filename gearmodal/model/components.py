@@ -53,6 +53,11 @@ def check_structure(component) -> None:
         raise ModelError(f"{f}.planet", f"expected a body name, got {planet!r}")
 
 
+#: the load that is every body's weight (:class:`gearmodal.Model`); its value is g, m/s^2
+GRAVITY = "gravity"
+#: the standard acceleration of gravity, m/s^2
+G_STANDARD = 9.80665
+
 @dataclass(eq=False)
 class Frame:
     """A reference frame rotating steadily about global z at ``speed_ratio`` x input speed.
@@ -95,6 +100,14 @@ class Body:
     stage, role : where the body belongs: its stage (``"stage1"``; ``""`` outside stages) and
         its role there (``"carrier"``, ``"sun"``, ``"planet"``, ``"ring"``, ``"gear"``,
         ``"pinion"``...). The builders set them; analyses read the structure from them.
+    position_error : (x, y) offset of the body's true centre from its nominal ``position``,
+        m, in its local axes (for a planet, whose ``orientation`` is its angle on the carrier:
+        radial and tangential, the carrier pinhole position error). The body is supported
+        about its true centre; the gaps of its meshes move by the error projected on their
+        lines of action (:class:`gearmodal.Mesh`).
+    thickness_error : tooth thickness error of a body that meshes, m, along the line of
+        action (positive: thicker teeth). Each flank stands out by half of it: both flanks'
+        gaps of each of its meshes close by half of it, the backlash by all of it.
     """
 
     name: str = ""
@@ -111,6 +124,8 @@ class Body:
     pinned_to: str | None = None
     stage: str = ""
     role: str = ""
+    position_error: tuple = (0.0, 0.0)
+    thickness_error: float = 0.0
 
     def _label(self) -> str:
         return self.name or type(self).__name__
@@ -127,6 +142,15 @@ class Body:
         self.inertia_diametral = v.plausible(f"{f}.inertia_diametral", v.positive(
             f"{f}.inertia_diametral", self.inertia_diametral, "kg m^2"), "inertia")
         v.choice(f"{f}.dofs", self.dofs, DOF_LEVELS)
+        err = tuple(self.position_error) if isinstance(self.position_error, (list, tuple)) \
+            else None
+        if err is None or len(err) != 2:
+            raise ModelError(f"{f}.position_error", f"= {self.position_error!r}: expected "
+                             "[x, y] in m (local axes: radial, tangential for a planet)")
+        self.position_error = tuple(v.plausible(f"{f}.position_error", v.number(
+            f"{f}.position_error", e, "m"), "gap") for e in err)
+        self.thickness_error = v.plausible(f"{f}.thickness_error", v.number(
+            f"{f}.thickness_error", self.thickness_error, "m"), "gap")
         if not isinstance(self.frame, str):
             raise ModelError(f"{f}.frame", f"expected a frame name, got {self.frame!r}")
         pos = tuple(self.position)
@@ -273,6 +297,12 @@ _BODY_FIELDS = (
           doc="renamed local coordinates, e.g. {x = \"zeta\"}"),
     Field("pinned_to", "name", doc="body whose pin carries this torsional body's centre"),
     *STRUCTURE,
+    Field("position_error", "vector", "m", lengths=(2,), default=(0.0, 0.0),
+          doc="true centre minus nominal, local axes (a planet: [radial, tangential] "
+              "pinhole error)", limits="gap"),
+    Field("thickness_error", "number", "m", default=0.0,
+          doc="tooth thickness error on the line of action (positive: thicker)",
+          limits="gap"),
 )
 Frame.SCHEMA = Table("frames", (
     NAME, Field("speed_ratio", "number", default=0.0,

@@ -48,7 +48,9 @@ MODEL_TABLE = Table('model (type = "components")', (
     Field("gear_ratio", "number", doc="output over input speed, as the builder computed it"),
     Field("rated_speed_rpm", "number", "rpm", low=0.0, doc="rated speed of the input"),
     Field("speed_range_rpm", "vector", "rpm", lengths=(2,), low=0.0,
-          doc="[low, high] operating range of the input")),
+          doc="[low, high] operating range of the input"),
+    Field("tilt_deg", "number", "deg", low=-90.0, high=90.0, default=0.0,
+          doc="shaft tilt, rotor end up (the direction of gravity)")),
     "The model's own data.")
 GROUPS_TABLE = Field("groups", "names", doc="named lists of bodies")
 
@@ -79,7 +81,7 @@ def dumps(model: Model) -> str:
             "output": model.output, "gear_ratio": model.gear_ratio,
             "rated_speed_rpm": model.rated_speed_rpm,
             "speed_range_rpm": None if model.speed_range_rpm is None
-            else list(model.speed_range_rpm)}
+            else list(model.speed_range_rpm), "tilt_deg": model.tilt_deg}
     doc: dict = {"model": MODEL_TABLE.write(meta)}
     frames = [f for f in model.frames.values() if f.name != GROUND]
     if frames:
@@ -184,7 +186,7 @@ def read_components(doc: dict, default_name: str | None = None) -> Model:
     model = Model(meta.get("name", default_name or "model"), input=meta.get("input"),
                   rated_speed_rpm=meta.get("rated_speed_rpm"),
                   speed_range_rpm=tuple(meta["speed_range_rpm"])
-                  if "speed_range_rpm" in meta else None)
+                  if "speed_range_rpm" in meta else None, tilt_deg=meta.get("tilt_deg", 0.0))
     model.output = meta.get("output")
     model.gear_ratio = meta.get("gear_ratio")
     paths: dict[str, str] = {}

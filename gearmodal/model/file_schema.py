@@ -41,7 +41,10 @@ MODEL = Table("model", (
     Field("name", "string", doc="model name (default: the file name)"),
     Field("rated_speed_rpm", "number", "rpm", **_NONNEG, doc="rated speed of the input"),
     Field("speed_range_rpm", "vector", "rpm", lengths=(2,), **_NONNEG,
-          doc="[low, high] operating range of the input")),
+          doc="[low, high] operating range of the input"),
+    Field("tilt_deg", "number", "deg", low=-90.0, high=90.0, default=0.0,
+          doc="shaft tilt, rotor end up: gravity (the load `gravity`) pulls along "
+              "(0, -cos tilt, sin tilt)")),
     "Every model file's `[model]` table.")
 GEAR = Table("gear (sun, planet, ring, gear, pinion, wheel)", (
     Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth", limits="teeth"),
@@ -98,7 +101,13 @@ PLANETARY = Table("planetary stage (`[planetary_stage]` or a `[[stages]]` entry)
     Field("planet_bearing", "support", doc="each planet on its carrier pin"),
     Field("carrier_bearing", "support", doc="carrier to the housing"),
     Field("sun_support", "support", doc="sun to the housing"),
-    Field("ring_support", "support", doc="ring to the housing")),
+    Field("ring_support", "support", doc="ring to the housing"),
+    *(_ERRORS := (
+        Field("pin_errors", "pairs", "m", limits="gap",
+              doc="per planet [radial, tangential] carrier pinhole position error"),
+        Field("tooth_thickness_errors", "vector", "m", limits="gap",
+              doc="per planet tooth thickness error on the line of action (positive: "
+                  "thicker)")))),
     "A planetary stage, carrier input.")
 PARALLEL = Table("parallel stage (`[parallel_stage]` or a `[[stages]]` entry)", (
     *_STAGE_COMMON,
@@ -138,7 +147,8 @@ LIN_PARKER = Table("lin_parker_stage", (
     Field("bearing", "table", "N/m", default=REQUIRED, doc="carrier, ring, sun, planet"),
     Field("torsional", "table", "N/m", default=REQUIRED,
           doc="carrier, ring, sun (on u = r theta)"),
-    Field("mesh", "table", "N/m", default=REQUIRED, doc="sun_planet, ring_planet")),
+    Field("mesh", "table", "N/m", default=REQUIRED, doc="sun_planet, ring_planet"),
+    *_ERRORS),
     "Lin & Parker's (1999) planar stage in their notation.")
 PER_MESH_ANGLE = Table("lin_parker_stage pressure angles", (
     Field("sun_planet", "number", "deg", low=math.degrees(1e-6), high=90.0, high_open=True,

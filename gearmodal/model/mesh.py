@@ -9,6 +9,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import ModelError
+from ..frames import rz
 from ..kernels.mesh import mesh_gap_jacobian
 from . import validate as v
 from .components import Gear, check_structure
@@ -123,10 +124,20 @@ class Mesh:
         ca, cb = ctx.centre(a), ctx.centre(b)
         if np.hypot(*(cb - ca)[:2]) == 0.0:
             raise ModelError(self.name, f"gears {a.name!r} and {b.name!r} have the same centre")
+        # manufacturing errors (Gear.position_error, Gear.thickness_error): with q measured
+        # from the nominal positions, a flank's compression is J (q + e) + t/2, so its offset
+        # (p = W q - offset) drops by J e + t/2; the backlash drops by the thickness errors
+        ea, eb = _centre_error(ctx, a), _centre_error(ctx, b)
+        thick = 0.5 * (getattr(a, "thickness_error", 0.0) + getattr(b, "thickness_error", 0.0))
+        if self.backlash - 2.0 * thick < 0.0:
+            raise ModelError(f"{self.name}.backlash", f"= {self.backlash!r} m: the tooth "
+                             f"thickness errors of {a.name!r} and {b.name!r} take "
+                             f"{2.0 * thick!r} m of it; the backlash must stay >= 0")
         for flank, side, off in (("front", self.side, 0.0), ("back", -self.side,
                                                              self.backlash)):
             J = mesh_gap_jacobian(ca[0], ca[1], cb[0], cb[1], rba, rbb, alpha, beta_b,
                                   float(side), internal)
+            off = off - thick - float(J[:3] @ ea + J[6:9] @ eb)
             w = ctx.row([(a, J[:6]), (b, J[6:])])
             if np.any(w):
                 variation = variation_of(model, self, a, b, bool(internal)) \
@@ -134,6 +145,16 @@ class Mesh:
                 ctx.contact(w, off, self.stiffness, self.damping, flank == "front", self,
                             flank, "mesh", columns=[(f"{self.name}.{flank}", 1.0)],
                             variation=variation)
+
+
+def _centre_error(ctx, body) -> np.ndarray:
+    """The global (x, y, z) offset of ``body``'s true centre at the assembly's azimuth, m:
+    its ``position_error`` turned by its local axes (a body that is not a gear has none)."""
+    e = getattr(body, "position_error", (0.0, 0.0))
+    if not any(e):
+        return np.zeros(3)
+    frame = ctx.model.frames[body.frame]
+    return rz(frame.speed_ratio * ctx.azimuth + body.orientation) @ np.array([*e, 0.0])
 
 
 Mesh.SCHEMA = Table("meshes", (

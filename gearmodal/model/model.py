@@ -8,10 +8,12 @@ built by stage builders are merged into drivetrains under a prefix (``"stage1.su
 from __future__ import annotations
 
 import copy
+import math
 
 from ..errors import ModelError
+from . import validate as v
 from .bearing import Bearing
-from .components import DOF_LEVELS, GROUND, LEVEL_INDICES, Body, Frame, Gear
+from .components import DOF_LEVELS, GRAVITY, GROUND, LEVEL_INDICES, Body, Frame, Gear
 from .mesh import Mesh
 
 #: the element kinds a model holds, in assembly order: each class adds its own rows
@@ -55,15 +57,21 @@ class Model:
         planetary stage, the rotor of a drivetrain); other bodies turn at ``speed_ratio`` times
         it.
     rated_speed_rpm, speed_range_rpm : optional operating data used by reports (rpm of the input).
+    tilt_deg : the shaft's tilt, deg (the rotor end up; default 0): gravity, the load
+        ``"gravity"`` (its value is g in m/s^2, e.g. ``loads={"gravity": 9.81}``), pulls every
+        body along ``(0, -cos(tilt), sin(tilt))`` in ground axes (``y`` up, ``z`` along the shaft
+        from the rotor to the generator).
     """
 
     def __init__(self, name: str = "model", input: str | None = None,
                  rated_speed_rpm: float | None = None,
-                 speed_range_rpm: tuple | None = None):
+                 speed_range_rpm: tuple | None = None, tilt_deg: float = 0.0):
         self.name = name
         self.input = input
         self.rated_speed_rpm = rated_speed_rpm
         self.speed_range_rpm = speed_range_rpm
+        self.tilt_deg = v.number("model.tilt_deg", tilt_deg, "deg", minimum=-90.0,
+                                 maximum=90.0)
         self.frames: dict[str, Frame] = {GROUND: Frame(GROUND, 0.0)}
         self.bodies: dict[str, Body] = {}
         self.meshes: dict[str, Mesh] = {}
@@ -188,8 +196,16 @@ class Model:
 
     @property
     def load_names(self) -> list[str]:
-        """All load names, e.g. ``"pinion.torque"`` (N m), ``"carrier.force_x"`` (N)."""
-        return [n for b in self.bodies.values() for n, _ in self.load_directions(b)]
+        """All load names, e.g. ``"pinion.torque"`` (N m), ``"carrier.force_x"`` (N), and
+        ``"gravity"`` (m/s^2: the weight of every body, :attr:`gravity_direction`)."""
+        return [n for b in self.bodies.values() for n, _ in self.load_directions(b)] \
+            + [GRAVITY]
+
+    @property
+    def gravity_direction(self) -> tuple[float, float, float]:
+        """Unit vector of gravity in ground axes: ``(0, -cos(tilt), sin(tilt))``."""
+        t = math.radians(getattr(self, "tilt_deg", 0.0))
+        return (0.0, -math.cos(t), math.sin(t))
 
     # -- checks ---------------------------------------------------------------------------
     def check(self) -> Model:

@@ -36,6 +36,7 @@ REQUIRED: Any = _Required()
 #: field types and how the reference page names them
 TYPES = {"number": "number", "integer": "integer", "boolean": "true/false",
          "string": "string", "name": "name", "choice": "one of", "vector": "array of numbers",
+         "pairs": "array of [a, b] number pairs",
          "directions": "table by direction", "names": "table of names", "angle": "number",
          "table": "table", "support": "number or support table",
          "per_mesh": "number or {sun_planet, ring_planet}",
@@ -155,6 +156,18 @@ class Field:
             out = [v.number(f"{path}[{i}]", x, self.unit) for i, x in enumerate(value)]
             for i, x in enumerate(out):
                 self._in_range(f"{path}[{i}]", x)
+            return out
+        if t == "pairs":
+            if not isinstance(value, list) or not all(isinstance(x, list) and len(x) == 2
+                                                      for x in value):
+                raise ModelError(path, f"= {value!r}: expected an array of [a, b] pairs"
+                                 + (f" in {self.unit}" if self.unit else ""))
+            out = []
+            for i, pair in enumerate(value):
+                out.append([v.number(f"{path}[{i}][{j}]", x, self.unit)
+                            for j, x in enumerate(pair)])
+                for j, x in enumerate(out[-1]):
+                    self._in_range(f"{path}[{i}][{j}]", x)
             return out
         if t == "directions":
             if not isinstance(value, dict):

@@ -400,7 +400,8 @@ def _planetary(path: str, value, in_drivetrain: bool = False) -> Model:
             carrier_inertia_diametral=carrier.get("inertia_diametral"),
             mesh_stiffness=k, backlash=t["backlash"], mesh_damping=t["mesh_damping"],
             dofs=t["dofs"], planet_angles=angles, mesh_alternation=t["mesh_alternation"],
-            **supports)
+            pin_errors=t.get("pin_errors"),
+            tooth_thickness_errors=t.get("tooth_thickness_errors"), **supports)
 
 
 def _parallel(path: str, value, in_drivetrain: bool = False) -> Model:
@@ -453,7 +454,8 @@ def _lin_parker(path: str, value) -> Model:
         return builders.lin_parker_stage(
             t["n_planets"], t["mass"], t["inertia_over_r2"], t["bearing"], t["torsional"],
             t["mesh"], pa_rad, t.get("planet_angles"), backlash=t["backlash"],
-            mesh_damping=t["mesh_damping"])
+            mesh_damping=t["mesh_damping"], pin_errors=t.get("pin_errors"),
+            tooth_thickness_errors=t.get("tooth_thickness_errors"))
 
 
 def _drivetrain(doc: dict) -> Model:
@@ -554,6 +556,9 @@ def _build(doc: dict, default_name: str | None) -> Model:
     model.name = name
     model.rated_speed_rpm = rated
     model.speed_range_rpm = span
+    with _at("", ()):
+        model.tilt_deg = fs.MODEL.by_key()["tilt_deg"].read("model.tilt_deg",
+                                                             meta.get("tilt_deg", 0.0))
     with _at("", ()):
         model.check()
     return model
