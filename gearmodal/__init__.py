@@ -4,7 +4,7 @@ Floating-frame gear models (torsional, planar or full DOF per component), assemb
 piecewise-linear contact model, modal and Campbell analysis. SI units throughout.
 """
 
-from . import auto, examples, io, turbine  # noqa: F401  (gm.io.read_loads, gm.turbine.Wind, ...)
+from . import auto, examples, io, sharing, turbine  # noqa: F401  (gm.io.read_loads, ...)
 from .assembly import Assembly, assemble
 from .auto import FidelityChoice
 from .auto import choose as choose_fidelity
@@ -39,8 +39,10 @@ from .model import (
     planetary_stage,
     register_element,
 )
+from .model.components import G_STANDARD
 from .model.dump import dump, dumps
 from .model.toml_io import load, loads
+from .sharing import static_load_sharing
 from .static import Equilibrium, balance, equilibrium
 from .studies import sweep
 
@@ -54,5 +56,5 @@ __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Const
            "assemble", "balance", "campbell", "choose_fidelity", "drivetrain", "equilibrium",
            "gear_pair",
            "lin_parker_stage", "load", "loads", "dump", "dumps", "modal", "parallel_stage",
-           "planetary_stage", "register_element",
+           "planetary_stage", "register_element", "static_load_sharing", "G_STANDARD",
            "sweep"]

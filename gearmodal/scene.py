@@ -41,6 +41,7 @@ The turbine in wind, simulated together with the gearbox model of ``scene.model`
     mounting_azimuth_deg = 0.0           # overrides the turbine file's
     aero_dt = 0.02                       # s, aerodynamic step
     aero_hold = "interpolate"            # interpolate | hold | linear
+    gravity = true                       # the gearbox bodies' weight (false: off)
 
     [wind]                               # gearmodal.turbine.Wind fields
     mean_speed = 10.0
@@ -110,7 +111,9 @@ TURBINE = Table("turbine", (
     Field("rebase_speed", "number", low=0.0, low_open=True, high=1.0,
           doc="speed drift that re-bases the reference rotation (default 0.01)"),
     Field("rebase_angle", "number", "rad", low=0.0, low_open=True, high=1.0,
-          doc="rigid rotation that re-bases it (default 5e-4)")),
+          doc="rigid rotation that re-bases it (default 5e-4)"),
+    Field("gravity", "boolean", default=True,
+          doc="the weight of every gearbox body, along the model's tilt_deg")),
     "The turbine in wind, simulated with the gearbox of scene.model.")
 #: the scene file's tables
 TABLES = ("scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind")

@@ -25,7 +25,7 @@ def cut_in_run(parts):
     """Laminar 10 m/s from 20 rpm: the generator cuts in about a second later."""
     tb, gb = parts
     wind = gm.turbine.Wind(mean_speed=10.0)
-    coupled = simulate_drivetrain(tb, wind, gb, 3.0, rotor_speed0_rpm=20.0)
+    coupled = simulate_drivetrain(tb, wind, gb, 3.0, rotor_speed0_rpm=20.0, gravity=False)
     rigid = simulate_turbine(tb, wind, 3.0, rotor_speed0_rpm=20.0)
     return coupled, rigid
 
@@ -61,6 +61,27 @@ def test_gearbox_carries_the_rotor_loads(cut_in_run):
     k_eff = 1.0 / (1.0 / 1e9 + 1.0 / 2e7)
     assert abs(fy) == pytest.approx(abs(lz) * k_eff / (k_eff + 1e7), rel=0.05)
     assert np.isfinite(f.to_numpy()).all()
+
+
+def test_gravity_puts_the_gearbox_weight_on_its_ground_supports(parts, cut_in_run):
+    """With gravity on (the default) the ground supports of the gearbox (the shaft's bending
+    support and the housing's suspension) carry, on average after cut-in, the weight of every
+    body that moves vertically (all but the torsional rotor and generator) on top of the
+    rotor loads: the same run without gravity, minus g times that mass (within 2 %: the
+    mean over 1 s of a drivetrain still swinging)."""
+    tb, gb = parts
+    off, _ = cut_in_run
+    on = simulate_drivetrain(tb, gm.turbine.Wind(mean_speed=10.0), gb, 3.0,
+                             rotor_speed0_rpm=20.0)
+    assert on.gearbox.settings["gravity_mps2"] == pytest.approx(9.80665)
+    mass = sum(b.mass for b in gb.bodies.values() if b.dofs != "torsional")
+
+    def ground(run):
+        f = run.gearbox.forces
+        late = f.index > 2.0
+        return (f["shaft_bending.y"] + f["suspension.y"])[late].mean()
+
+    assert ground(on) - ground(off) == pytest.approx(-9.80665 * mass, rel=0.02)
 
 
 def test_multirate_aero_step_error_is_small(parts):

@@ -11,7 +11,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..errors import ModelError
 from ..result_io import read_csv, read_header, write_header
+from ..sharing import MESH_ROLES, k_gamma_table
 
 EVENT_COLUMNS = ["time", "element", "contact", "state_before", "state_after", "gap_rate",
                  "force_after"]
@@ -262,6 +264,55 @@ class SimulationResult:
             peaks[stage or "stage"] = float(np.nanmax(factor)) if np.isfinite(factor).any() \
                 else float("nan")
         out.attrs["peak_factor"] = peaks
+        return out
+
+    def k_gamma(self, window_s: float | str | None = None) -> pd.DataFrame:
+        """The mesh load factor K_gamma per stage and mesh kind (:mod:`gearmodal.sharing`):
+        the largest planet's net flank force (front minus back), averaged over a window, over
+        the mean of the planets'. ``window_s``: None, the whole run (one row per stage and mesh
+        kind); a length in s, one row per window from ``t[0]`` (a last, shorter window is
+        dropped); ``"revolution"``, one input revolution (``settings["speed_rpm"]``: the
+        carrier of a planetary stage with carrier input, the rotor of a drivetrain). Columns
+        ``window``, ``t_start``, ``t_end``, ``stage``, ``mesh``, ``n_planets``, ``k_gamma``,
+        ``max_planet``, ``mean_load_N``."""
+        t = self.forces.index.to_numpy(dtype=float)
+        if isinstance(window_s, str):
+            if window_s != "revolution":
+                raise ModelError("window_s", f"= {window_s!r}: a length in s, "
+                                 "'revolution' or None")
+            rpm = self.settings.get("speed_rpm")
+            if not rpm:
+                raise ModelError("window_s", "= 'revolution': this run has no constant input "
+                                 "speed (settings['speed_rpm']); give a length in s")
+            window_s = 60.0 / abs(float(rpm))
+        if window_s is None:
+            edges = np.array([t[0], t[-1]])
+        else:
+            window_s = float(window_s)
+            if not (np.isfinite(window_s) and window_s > 0):
+                raise ModelError("window_s", f"= {window_s!r}: must be > 0 s")
+            n = int(np.floor((t[-1] - t[0]) / window_s * (1 + 1e-12)))
+            if n < 1:
+                raise ModelError("window_s", f"= {window_s!r} s: longer than the run "
+                                 f"({t[-1] - t[0]:.6g} s)")
+            edges = t[0] + window_s * np.arange(n + 1)
+        meshes = {m: (self.stage_of(m), role, self.planet_of(m))
+                  for role in MESH_ROLES for m in self.meshes(role)}
+        if not meshes:
+            raise ModelError("k_gamma", "this run has no planetary stage (no sun-planet or "
+                             "ring-planet meshes)")
+        net = pd.DataFrame({m: self.forces[f"{m}.front"].to_numpy()
+                            - self.forces[f"{m}.back"].to_numpy() for m in meshes})
+        rows = []
+        for k in range(len(edges) - 1):
+            last = k == len(edges) - 2
+            sel = (t >= edges[k]) & ((t <= edges[k + 1]) if last else (t < edges[k + 1]))
+            rows.append(net[sel].mean().rename(k))
+        table = pd.DataFrame(rows)
+        table.index.name = "window"
+        out = k_gamma_table(table, meshes)
+        out.insert(1, "t_start", edges[out["window"].to_numpy()])
+        out.insert(2, "t_end", edges[out["window"].to_numpy() + 1])
         return out
 
     def to_frame(self) -> pd.DataFrame:

@@ -38,7 +38,9 @@ on ``generator.torque`` and the shaft-end force on the first planetary carrier
 (``stageN.carrier.force_x`` = global ``y``, ``force_y`` = global ``z``; not modelled when the
 carrier has no translation, a torsional stage): the rear main-bearing reaction of
 :meth:`gearmodal.turbine.Turbine.rear_force` (rotor weight, thrust, tilt and yaw moments,
-shear forces). Gravity on the gearbox internals is not modelled.
+shear forces). Gravity on every body of the gearbox (the load ``gravity``, on by default:
+``gravity=False`` turns it off) is a constant ground-axes force, which the turning geometry
+maps onto the carrier frame exactly, as it does the shaft-end force.
 
 The mounting azimuth ``Turbine.mounting_azimuth_deg`` is the angle from blade 1 to planet 1 in
 the direction of rotation: 0 puts planet 1 on blade 1's radius.
@@ -61,6 +63,7 @@ from ..errors import ModelError
 from ..integrate import Driver, SimulationResult, build_result, get_method, mesh_stiffness
 from ..integrate.azimuth import AzimuthAssembler
 from ..integrate.system import PiecewiseLinearSystem
+from ..model.components import G_STANDARD, GRAVITY
 from ..result_io import read_header, write_header
 from ..static import equilibrium
 from .rotor import LOAD_COLUMNS
@@ -203,8 +206,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                         rotor_speed0_rpm: float = 6.0, azimuth0_deg: float = 0.0,
                         connected: bool = False, rebase_speed: float = 0.01,
                         rebase_angle: float = 5e-4,
-                        method: str = "exact", progress=None,
-                        **options) -> DrivetrainResult:
+                        method: str = "exact", gravity: bool | float = True,
+                        progress=None, **options) -> DrivetrainResult:
     """Run turbine and gearbox together from ``rotor_speed0_rpm`` for ``t_end`` s.
 
     Parameters
@@ -224,6 +227,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         the reference azimuth, so this bounds how far it lags the true carrier angle.
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``; ``options`` go to it (refused if it
         does not take them).
+    gravity : the weight of every gearbox body (the model's load ``gravity`` along its
+        ``tilt_deg``): True (standard gravity, 9.80665 m/s^2), False, or g in m/s^2.
     progress : ``progress(i, n)`` per aerodynamic step (the solver never prints).
     """
     for label, val in (("t_end", t_end), ("dt", dt), ("aero_dt", aero_dt),
@@ -236,6 +241,12 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     if aero_hold not in HOLDS:
         raise ModelError("aero_hold", f"= {aero_hold!r}: must be one of {HOLDS}")
     get_method(method, options)  # the name and its options checked
+    if isinstance(gravity, bool):
+        g = G_STANDARD if gravity else 0.0
+    elif isinstance(gravity, (int, float)) and math.isfinite(gravity) and 0 <= gravity <= 100:
+        g = float(gravity)
+    else:
+        raise ModelError("gravity", f"= {gravity!r}: true, false or g in m/s^2 (0 to 100)")
     if not (isinstance(rotor_speed0_rpm, (int, float)) and rotor_speed0_rpm >= 0):
         raise ModelError("rotor_speed0_rpm", f"= {rotor_speed0_rpm!r}: must be >= 0 rpm")
     if wind.turbulence_intensity > 0 and wind.duration < t_end:
@@ -269,6 +280,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     names = ["rotor.torque", "generator.torque"]
     if bending:
         names += [carrier_x, carrier_x[:-1] + "y"]
+    if g:
+        names.append(GRAVITY)
     cols = [asm0.load_names.index(c) for c in names]
     r = rigid_rotation(asm0)
     Mr = asm0.M @ r
@@ -376,6 +389,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 loads0 = {"rotor.torque": u[0, 0], "generator.torque": -sg * T0}
                 if bending:
                     loads0.update({names[2]: u[0, 1], names[3]: u[0, 2]})
+                if g:
+                    loads0[GRAVITY] = g
                 x[:n] = _accelerating_equilibrium(geo.assemble(psi_f + mount), r, om_f / RPM,
                                                   loads0)
                 s = system.penetration(x, psi_f + mount) > 0
@@ -389,6 +404,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         # the centrifugal force
         F = np.column_stack([u[:, 0], np.full(m_sub + 1, -sg * T0)]
                             + ([u[:, 1], u[:, 2]] if bending else [])
+                            + ([np.full(m_sub + 1, g)] if g else [])
                             + [np.ones(m_sub + 1)])
         a0 = 0 if kk == 0 else 1
         az_grid[kk + a0:kk + m_sub + 1] = az0 + om_f * (tt[a0:] - t)
@@ -412,7 +428,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 "rotor_speed0_rpm": rotor_speed0_rpm, "azimuth0_deg": azimuth0_deg,
                 "mounting_azimuth_deg": turbine.mounting_azimuth_deg,
                 "rebase_speed": rebase_speed, "rebase_angle": rebase_angle,
-                "method": method, "options": options,
+                "method": method, "options": options, "gravity_mps2": g,
                 "shaft_end_force": "on the carrier" if bending else "not modelled (the first "
                 "stage's carrier has no translation)",
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}

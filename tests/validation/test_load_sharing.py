@@ -173,3 +173,45 @@ def test_errors_are_validated_and_round_trip():
     again = gm.loads(gm.dumps(m))
     assert again.bodies["planet3"].position_error == (0.0, -3e-5)
     np.testing.assert_array_equal(again.assemble().contacts.offset, m.assemble().contacts.offset)
+
+
+def test_k_gamma_falls_as_one_over_torque_for_a_fixed_error():
+    """K_gamma from the static equilibrium (gm.static_load_sharing): the four-planet closed form
+    gives K_gamma = 1 + k delta / (4 F), so (K_gamma - 1) times the torque is constant
+    (load sharing improves with torque, the published trend); three planets with a floating
+    sun share equally, K_gamma = 1, the value ABS tabulates for up to three planets."""
+    e = 30e-6
+    pins = [[0.0, e], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]
+    torques = [5e4, 1e5, 2e5, 4e5]
+    t = gm.static_load_sharing(_stage(4, pin_errors=pins), torques)
+    sun = t[t.mesh == "sun_planet"].set_index("torque_Nm")
+    alpha = _stage(4).bodies["sun"].transverse_pressure_angle
+    k = K_MESH / 2
+    expected = 1 + k * 2 * e * math.cos(alpha) / 4 / sun.mean_load_N
+    np.testing.assert_allclose(sun.k_gamma, expected, rtol=1e-6)
+    excess = (sun.k_gamma - 1) * sun.index
+    np.testing.assert_allclose(excess, excess.iloc[0], rtol=1e-6)
+    assert set(sun.max_planet) <= {"planet1", "planet3"}
+    three = gm.static_load_sharing(_stage(3, pin_errors=[[1e-5, 4e-5]] * 3), [2e5])
+    np.testing.assert_allclose(three.k_gamma, gm.sharing.ABS_K_GAMMA[3], rtol=1e-8)
+
+
+def test_k_gamma_of_a_run_is_the_ratio_of_the_planets_mean_loads():
+    """SimulationResult.k_gamma: the largest planet's mean net flank force over the planets'
+    mean, over the run and per input revolution (two revolutions at 1200 rpm: two windows),
+    computed here from the force table."""
+    m = _stage(4, pin_errors=[[0.0, 30e-6], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
+    loads = gm.balance(m, {"carrier.torque": TORQUE}, on="sun.torque")
+    sim = gm.simulate(m, 0.1, dt=1e-4, speed_rpm=1200.0, loads=loads)
+    f = sim.forces
+    net = np.array([(f[f"sun_planet{i}.front"] - f[f"sun_planet{i}.back"]).mean()
+                    for i in range(1, 5)])
+    run = sim.k_gamma()
+    got = run[run.mesh == "sun_planet"].iloc[0]
+    assert got.k_gamma == pytest.approx(4 * net.max() / net.sum(), rel=1e-12)
+    assert got.max_planet == f"planet{int(np.argmax(net)) + 1}"
+    per = sim.k_gamma("revolution")
+    assert list(per[per.mesh == "sun_planet"].window) == [0, 1]
+    assert per.t_end.max() == pytest.approx(0.1)
+    with pytest.raises(gm.ModelError, match="window_s"):
+        sim.k_gamma(1.0)
