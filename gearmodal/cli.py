@@ -202,7 +202,8 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-STUDIES = ("double-contact", "gravity-torque", "mounting-azimuth", "clearance-map")
+STUDIES = ("double-contact", "gravity-torque", "mounting-azimuth", "clearance-map",
+           "load-sharing")
 
 
 def _study_module(name: str, folder: str | None):
@@ -233,9 +234,10 @@ def cmd_study(args) -> int:
     mod = _study_module(args.study, args.studies)
     params = inspect.signature(mod.run).parameters
     given = {"duration": args.duration, "seed": args.seed, "seeds": args.seeds,
-             "step_deg": args.step, "max_workers": args.workers}
+             "step_deg": args.step, "max_workers": args.workers,
+             "gravity": False if args.no_gravity else None}
     flags = {"duration": "--duration", "seed": "--seed", "seeds": "--seeds", "step_deg": "--step",
-             "max_workers": "--workers"}
+             "max_workers": "--workers", "gravity": "--no-gravity"}
     kwargs = {"progress": not args.quiet}
     for key, value in given.items():
         if value is None:
@@ -318,7 +320,10 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--seeds", type=int, help="number of turbulence seeds from --seed on "
                     "(mounting-azimuth; default 1)")
     st.add_argument("--step", type=float, help="azimuth step, deg (gravity-torque, "
-                    "mounting-azimuth)")
+                    "mounting-azimuth, load-sharing)")
+    st.add_argument("--no-gravity", action="store_true", dest="no_gravity",
+                    help="leave out the gearbox bodies' weight (double-contact, "
+                         "mounting-azimuth; default: on)")
     st.add_argument("--workers", type=int, help="parallel processes (default: CPU count)")
     st.add_argument("--studies", help="folder of the study scripts (default: the source "
                     "tree's studies/)")

@@ -54,6 +54,7 @@ FIGURES: tuple[Figure, ...] = (
            "mounting_azimuth.png", ("--duration", "1", "--step", "60", "--seeds", "1")),
     Figure("clearance_map.png", ("study", "clearance-map"), "clearance_map.png",
            ("--duration", "0.02")),
+    Figure("load_sharing.png", ("study", "load-sharing"), "k_gamma.png", ("--step", "120")),
 )
 
 #: the mode-shape drawings: (file name, model, mode index at rated speed, animated too); the

@@ -46,16 +46,18 @@ def _scatter(summary: pd.DataFrame, seeds: int) -> str:
 
 
 def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int = 1, step_deg: float = 20.0,
-        executor=None, progress: bool = True, max_workers: int | None = None) -> pd.DataFrame:
+        gravity: bool = True, executor=None, progress: bool = True,
+        max_workers: int | None = None) -> pd.DataFrame:
     """Sweep the mounting azimuth, each with ``seeds`` turbulence seeds from ``seed`` on
     (stored in ``out/store``, resumable). Writes runs.csv (one row per run) and summary.csv
     (per azimuth: the mean over the seeds of each run's peak, and its standard deviation);
-    returns the summary."""
+    returns the summary. ``gravity=False`` leaves out the gearbox bodies' weight."""
     out = Path(out)
     az = np.arange(0.0, 120.0 + 1e-9, step_deg)
     grid = [(a, seed + k) for a in az for k in range(seeds)]
     cases = pd.DataFrame({"turbine.mounting_azimuth_deg": [a for a, _ in grid],
-                          "wind.seed": [sd for _, sd in grid], "scene.t_end": duration})
+                          "wind.seed": [sd for _, sd in grid], "scene.t_end": duration,
+                          "turbine.gravity": gravity})
     cases["model.stages.0.carrier_bearing"] = [CLEARANCE] * len(cases)
     res = gm.sweep(SCENE, cases, executor, store=out / "store", progress=progress,
                    max_workers=max_workers)

@@ -215,6 +215,28 @@ def test_study_double_contact_shortened(tmp_path, capsys):
     assert {p: p.stat().st_mtime_ns for p in rows} == rows
 
 
+def test_study_load_sharing_k_gamma_against_torque(tmp_path):
+    """gearmodal study load-sharing (issue 21): with the reference carrier bearing, no gravity
+    and no error the three planets share exactly (K_gamma = 1, the planet bearing the torque
+    share); a pinhole error raises K_gamma, less as the torque grows; the clearance bearing
+    under gravity is in double contact and shares worse than the reference under gravity."""
+    out = tmp_path / "ls"
+    assert main(["study", "load-sharing", "--step", "90", "--out", str(out), "--quiet"]) == 0
+    s = pd.read_csv(out / "summary.csv")
+    assert {"k_gamma.png", "report.html", "cases.csv"} <= {p.name for p in out.iterdir()}
+    ref = s[(s.bearing == "reference") & (s.gravity == "off")]
+    ideal = ref[ref.pin_error_um == 0]
+    np.testing.assert_allclose(ideal.k_gamma_sun, 1.0, rtol=1e-9)
+    r_c = 0.010 * (21 + 39) / (2 * math.cos(math.radians(7.5)))
+    np.testing.assert_allclose(ideal.planet_bearing_peak_N, ideal.torque_Nm / (3 * r_c),
+                               rtol=1e-3)
+    worst = ref[ref.pin_error_um == 50].sort_values("torque_fraction")
+    assert (worst.k_gamma_sun > 1.0).all() and worst.k_gamma_sun.is_monotonic_decreasing
+    on = s[s.gravity == "on"].set_index(["bearing", "pin_error_um", "torque_fraction"])
+    assert (on.loc["clearance"].double_contact_fraction > 0).all()
+    assert (on.loc["clearance"].k_gamma_sun > on.loc["reference"].k_gamma_sun).all()
+
+
 def test_study_gravity_torque_planet_bearing_load_is_the_torque_share(tmp_path):
     out = tmp_path / "gt"
     assert main(["study", "gravity-torque", "--step", "30", "--out", str(out), "--quiet"]) == 0
