@@ -32,6 +32,28 @@ from .model.mesh_stiffness import MeshVariation
 
 
 @dataclass
+class OffsetWaves:
+    """Offsets that vary with the input azimuth at orders that are not whole numbers (a gear's
+    run-out turning with its spin, a mesh's transmission error at the mesh frequency): contact
+    ``rows[j]``'s offset has ``Re(z[j] e^(i h[j] psi))`` added (``h >= 0`` per input radian).
+    The assembled ``Contacts.offset`` holds their value at the assembly's azimuth too."""
+
+    rows: np.ndarray
+    h: np.ndarray
+    z: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def at(self, azimuth: float, n_contacts: int) -> np.ndarray:
+        """Their sum per contact at input ``azimuth`` (rad), (n_contacts,)."""
+        out = np.zeros(n_contacts)
+        if len(self.rows):
+            np.add.at(out, self.rows, (self.z * np.exp(1j * self.h * azimuth)).real)
+        return out
+
+
+@dataclass
 class Contacts:
     """The unilateral contacts of a model, one row each.
 
@@ -63,6 +85,7 @@ class Contacts:
     nominal: np.ndarray = None
     angle: np.ndarray = None
     variation: MeshVariation | None = None
+    waves: OffsetWaves | None = None
     columns: list = None
     stage: list = None
     planet: list = None
@@ -100,7 +123,19 @@ class Contacts:
             ok = new[var.rows] >= 0
             var = MeshVariation(new[var.rows][ok], var.rate[ok], var.phase[ok],
                                 var.double[ok], var.k_single[ok], var.k_double[ok])
-        return Contacts(W=W, variation=var, **out)
+        waves = self.waves
+        if waves is not None and len(waves):
+            new = -np.ones(len(self), dtype=np.int64)
+            new[idx] = np.arange(len(idx))
+            ok = new[waves.rows] >= 0
+            waves = OffsetWaves(new[waves.rows][ok], waves.h[ok], waves.z[ok])
+        return Contacts(W=W, variation=var, waves=waves, **out)
+
+    def wave_offset(self, azimuth: float) -> np.ndarray:
+        """The azimuth-varying part of the offsets (:class:`OffsetWaves`) at ``azimuth``."""
+        if self.waves is None or not len(self.waves):
+            return np.zeros(len(self))
+        return self.waves.at(azimuth, len(self))
 
     def __len__(self) -> int:
         return len(self.element)
@@ -267,6 +302,7 @@ class _Rows:
     def __init__(self):
         self.rows: list[tuple] = []
         self.variation: list[tuple] = []
+        self.waves: list[tuple] = []
         self._element, self._meta = None, ()
 
     def __len__(self) -> int:
@@ -298,6 +334,10 @@ class _Rows:
             v = list(zip(*self.variation, strict=True))
             out.variation = MeshVariation(np.array(v[0], dtype=np.int64),
                                           *(np.array(c, dtype=float) for c in v[1:]))
+        if self.waves:
+            r, h, z = zip(*self.waves, strict=True)
+            out.waves = OffsetWaves(np.array(r, dtype=np.int64), np.array(h, dtype=float),
+                                    np.array(z, dtype=complex))
         return out
 
 
@@ -354,11 +394,13 @@ class Contributions:
 
     def contact(self, w, offset: float, k: float, c: float, nominal: bool, element,
                 label: str, kind: str, *, columns, angle: float = np.nan,
-                variation=None) -> int:
+                variation=None, waves=()) -> int:
         """A unilateral contact of ``element``: penetration ``w q - offset``, force
         ``k p + c p'`` while ``p > 0``, added with ``weight`` to each result force column of
         ``columns`` (``[(column, weight), ...]``); ``variation`` an alternating stiffness
-        ``(rate, phase, double, k_single, k_double)``. Returns the contact's row."""
+        ``(rate, phase, double, k_single, k_double)``; ``waves`` ``[(h, z), ...]`` offset
+        terms ``Re(z e^(i h psi))`` (:class:`OffsetWaves`; ``offset`` includes their value at
+        this azimuth). Returns the contact's row."""
         rows = self.contacts  # _Rows.add inlined: polygons add hundreds of rows
         if element is not rows._element:
             rows._element, rows._meta = element, _structure(element)
@@ -369,6 +411,8 @@ class Contributions:
         i = len(rows.rows) - 1
         if variation is not None:
             rows.variation.append((i, *variation))
+        for h, z in waves:
+            rows.waves.append((i, h, z))
         return i
 
     def spring(self, w, k: float, c: float, element, direction: str, acts: bool) -> None:

@@ -89,6 +89,8 @@ def rotating_geometry(model: Model) -> bool:
             return False
         return np.allclose(x, y, rtol=0, atol=1e-12 * max(np.abs(x).max(initial=0.0), 1e-300))
 
+    if a.contacts.waves is not None and len(a.contacts.waves):
+        return True  # offsets turning (run-out, transmission error)
     pairs = [(a.K, b.K), (a.C, b.C), (a.B, b.B), (a.contacts.W, b.contacts.W),
              (a.contacts.offset, b.contacts.offset)]
     for part in ("springs", "round"):

@@ -33,10 +33,13 @@ CHECK_RTOL = 1e-10
 _FIELDS = ("M", "C", "K", "G", "K_cent", "f_cent", "B")
 
 
-def _arrays(asm: Assembly) -> dict[str, np.ndarray]:
+def _arrays(asm: Assembly, waves: bool = False) -> dict[str, np.ndarray]:
     out = {f: getattr(asm, f) for f in _FIELDS}
     out["contacts.W"] = asm.contacts.W
-    out["contacts.offset"] = asm.contacts.offset
+    # the offsets without their waves (orders that are not whole numbers: run-out, TE), which
+    # join the harmonics afterwards with their own orders
+    out["contacts.offset"] = asm.contacts.offset if waves else \
+        asm.contacts.offset - asm.contacts.wave_offset(asm.azimuth)
     if asm.springs is not None:
         out["springs.W"] = asm.springs.W
     if asm.round is not None:
@@ -80,13 +83,35 @@ class AzimuthAssembler:
                 top = max(top, max(live))
             else:
                 self.constant[key] = a[0].copy()
-        self.harmonics = self.harmonics[:top + 1]
+        self.harmonics = self.harmonics[:top + 1].astype(float)
         self.coef = {k: (a[:top + 1], b[:top + 1]) for k, (a, b) in self.coef.items()}
+        self._add_waves(self.template.contacts.waves)
         check = model.assemble(azimuth=CHECK_AZIMUTH)
         got = self._values(CHECK_AZIMUTH)
         self.exact = all(
             np.allclose(got[k], v, rtol=0, atol=CHECK_RTOL * max(np.abs(v).max(initial=0), 1e-30))
-            for k, v in _arrays(check).items())
+            for k, v in _arrays(check, waves=True).items())
+
+    def _add_waves(self, waves) -> None:
+        """Append the offset waves' orders to the harmonics (every other field zero there):
+        ``Re(z e^(i h psi)) = a cos(h psi) + b sin(h psi)`` with ``a = Re z``, ``b = -Im z``."""
+        if waves is None or not len(waves):
+            return
+        orders = np.unique(waves.h)
+        n_c = len(self.template.contacts)
+        self.harmonics = np.concatenate([self.harmonics, orders])
+        key = "contacts.offset"
+        self.constant.pop(key, None)  # it turns now (its coefficients are in coef already)
+        for k, (a, b) in list(self.coef.items()):
+            extra = np.zeros((len(orders),) + a.shape[1:])
+            ea, eb = extra.copy(), extra.copy()
+            if k == key:
+                for j, h in enumerate(orders):
+                    sel = waves.h == h
+                    np.add.at(ea[j], waves.rows[sel], waves.z[sel].real)
+                    np.add.at(eb[j], waves.rows[sel], -waves.z[sel].imag)
+                assert ea.shape[1:] == (n_c,)
+            self.coef[k] = (np.concatenate([a, ea]), np.concatenate([b, eb]))
 
     def _values(self, azimuth: float) -> dict[str, np.ndarray]:
         c = np.cos(self.harmonics * azimuth)

@@ -40,7 +40,8 @@ ZERO = 1e-13
 class Periodic:
     """Harmonic data of a system's turning geometry (module docstring; arrays for the kernel).
 
-    harm : (H1,) harmonic numbers, ``harm[0] = 0``.
+    harm : (H1,) harmonic orders per input radian, ``harm[0] = 0`` (whole numbers for the
+        turning frames, any real order for offset waves: run-out, transmission error).
     tcols : (nT,) the coordinates any turning row or matrix touches.
     ZK, ZC : (H1, n, nT) ``M^-1 Z_h`` of the turning stiffness and damping (``h = 0``: zero,
         the constant part is the frozen system's).
@@ -120,7 +121,7 @@ def periodic_data(geo, Minv: np.ndarray) -> tuple[dict, Periodic | None]:
     TW = np.ascontiguousarray(Wz[:, tc_idx][:, :, tcols])
     TU = np.ascontiguousarray(np.einsum("ij,hej->hei", Minv, Wz[:, tc_idx]))
     urows = np.flatnonzero(np.abs(TU).max(axis=(0, 1)) > 0) if len(tc_idx) else np.zeros(0, int)
-    per = Periodic(harm=np.asarray(geo.harmonics, dtype=np.int64), tcols=tcols.astype(np.int64),
+    per = Periodic(harm=np.asarray(geo.harmonics, dtype=float), tcols=tcols.astype(np.int64),
                    ZK=np.ascontiguousarray(ZK), ZC=np.ascontiguousarray(ZC),
                    tc_idx=tc_idx.astype(np.int64), TW=TW,
                    TOFF=np.ascontiguousarray(Oz[:, tc_idx]), TU=TU,
@@ -151,7 +152,7 @@ def load_harmonics(geo, Minv: np.ndarray, columns: list[int], extra: np.ndarray 
 def frozen() -> tuple[Periodic, np.ndarray]:
     """Empty turning data for a frozen system (one harmonic, no columns) and its ``GT``."""
     z = np.zeros((1, 0, 0), dtype=complex)
-    per = Periodic(harm=np.zeros(1, dtype=np.int64), tcols=np.zeros(0, dtype=np.int64),
+    per = Periodic(harm=np.zeros(1), tcols=np.zeros(0, dtype=np.int64),
                    ZK=z, ZC=z, tc_idx=np.zeros(0, dtype=np.int64),
                    TW=z, TOFF=np.zeros((1, 0), dtype=complex), TU=z,
                    krows=np.zeros(0, dtype=np.int64), urows=np.zeros(0, dtype=np.int64))

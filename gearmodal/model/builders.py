@@ -289,6 +289,38 @@ def _errors(name: str, n: int, pin_errors, tooth_thickness_errors) -> list[dict]
     return out
 
 
+def _runout(name: str, runout, bodies=("sun", "ring", "carrier")) -> dict:
+    """``{body: (e_m, phase_rad)}`` from the builders' ``runout`` table (None: none)."""
+    if runout is None:
+        return {}
+    f = f"{name}.runout"
+    if not isinstance(runout, dict):
+        raise ModelError(f, f"= {runout!r}: expected a table {{sun = [e_m, phase], ...}} of "
+                         + ", ".join(bodies))
+    out = {}
+    for k, val in runout.items():
+        if k not in bodies:
+            raise ModelError(f"{f}.{k}", "unknown body; allowed: " + ", ".join(bodies))
+        if not isinstance(val, (list, tuple)) or len(val) != 2:
+            raise ModelError(f"{f}.{k}", f"= {val!r}: expected [eccentricity_m, phase]")
+        e = v.plausible(f"{f}.{k}", v.nonnegative(f"{f}.{k}", val[0], "m"), "gap")
+        out[k] = (e, v.number(f"{f}.{k}", val[1], "rad"))
+    return out
+
+
+def _te(name: str, te) -> tuple:
+    """A mesh's ``transmission_error`` pairs ``[(amplitude_m, phase_rad), ...]`` (None: none)."""
+    if te is None:
+        return ()
+    f = f"{name}.transmission_error"
+    if not isinstance(te, (list, tuple)) or not all(isinstance(x, (list, tuple))
+                                                    and len(x) == 2 for x in te):
+        raise ModelError(f, f"= {te!r}: expected [[amplitude_m, phase], ...], one pair per "
+                         "harmonic of the mesh frequency")
+    return tuple((v.plausible(f"{f}[{i}]", v.nonnegative(f"{f}[{i}]", a, "m"), "gap"),
+                  v.number(f"{f}[{i}]", ph, "rad")) for i, (a, ph) in enumerate(te))
+
+
 def _check_backlash(name: str, backlash: float, errors: list[dict]) -> None:
     for i, e in enumerate(errors):
         t = e.get("thickness_error", 0.0)
@@ -342,7 +374,8 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
                     ring_support=None, dofs: str = "planar", planet_angles=None,
                     carrier_inertia_diametral: float | None = None,
                     name: str = "planetary_stage", mesh_alternation=None, pin_errors=None,
-                    tooth_thickness_errors=None) -> Model:
+                    tooth_thickness_errors=None, runout=None,
+                    transmission_error=None) -> Model:
     """A planetary stage with carrier input and the ring held (the wind-turbine layout).
 
     Parameters
@@ -366,6 +399,12 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         (the planet's ``position_error``; tangential positive in the sense of the carrier's
         positive rotation). tooth_thickness_errors : per planet, m along the line of action
         (positive: thicker; each of its flanks closes by half of it, the backlash by all).
+    runout : ``{"sun": (e_m, phase_rad), "ring": ..., "carrier": ...}``: the eccentricity of a
+        wheel's teeth turning with it (``Body.runout``); the carrier's moves every planet pin by
+        the same vector (a common pinhole error, constant in the carrier frame).
+    transmission_error : ``[(amplitude_m, phase_rad), ...]`` harmonics of the mesh frequency
+        on every mesh (or a table ``sun_planet``, ``ring_planet``), planet n's phased by the
+        planet spacing as ``mesh_alternation`` is (:class:`Mesh`).
 
     Notes
     -----
@@ -395,6 +434,15 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
     psi = _planet_angles(f"{name}.planet_angles", planet_angles, n_planets)
     errors = _errors(name, n_planets, pin_errors, tooth_thickness_errors)
     _check_backlash(name, backlash, errors)
+    ro = _runout(name, runout)
+    if isinstance(transmission_error, dict):
+        unknown = set(transmission_error) - {"sun_planet", "ring_planet"}
+        if unknown:
+            raise ModelError(f"{name}.transmission_error.{sorted(unknown)[0]}",
+                             "unknown mesh kind; allowed: sun_planet, ring_planet")
+        te = {k: _te(name, transmission_error.get(k)) for k in ("sun_planet", "ring_planet")}
+    else:
+        te = dict.fromkeys(("sun_planet", "ring_planet"), _te(name, transmission_error))
     if isinstance(mesh_stiffness, dict):
         k_sp = mesh_stiffness.get("sun_planet")
         k_rp = mesh_stiffness.get("ring_planet")
@@ -412,6 +460,7 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
                         frame="carrier", speed_ratio=1.0, role="carrier")
     for g, ratio in ((s, 1.0 + r.teeth / s.teeth), (r, 0.0)):
         g.frame, g.speed_ratio, g.role = "carrier", ratio, g.name
+        g.runout = ro.get(g.name, (0.0, 0.0))
     m.add(carrier)
     m.add(s)
     m.add(r)
@@ -423,7 +472,11 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         pl.coordinate_names = {"x": "zeta", "y": "eta"}
         pl.pinned_to = "carrier"  # a torsional planet rides on its carrier pin
         pl.role = "planet"
-        pl.position_error = errors[n - 1].get("position_error", (0.0, 0.0))
+        pe = errors[n - 1].get("position_error", (0.0, 0.0))
+        if "carrier" in ro:  # the pin circle off the carrier's axis: every pin moves by e
+            e, ph = ro["carrier"]
+            pe = (pe[0] + e * math.cos(ph - a), pe[1] + e * math.sin(ph - a))
+        pl.position_error = pe
         pl.thickness_error = errors[n - 1].get("thickness_error", 0.0)
         m.add(pl)
     for label, spec, body in (("carrier_bearing", carrier_bearing, "carrier"),
@@ -444,14 +497,14 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         # pass planet n's position z_r psi_n / 2 pi periods later, the sun's z_s psi_n / 2 pi
         # earlier (mesh_stiffness M3)
         alt = f"{name}.mesh_alternation"
-        m.add(Mesh(f"sun_{pl}", "sun", pl, k_sp, backlash, mesh_damping, side=-1,
-                   role="sun_planet", planet=pl,
-                   **_alternation(alt, mesh_alternation, "sun_planet",
-                                  -s.teeth * a / (2 * math.pi))))
-        m.add(Mesh(f"ring_{pl}", "ring", pl, k_rp, backlash, mesh_damping, side=-1,
-                   role="ring_planet", planet=pl,
-                   **_alternation(alt, mesh_alternation, "ring_planet",
-                                  r.teeth * a / (2 * math.pi))))
+        for kind, gear, frac in (("sun_planet", "sun", -s.teeth * a / (2 * math.pi)),
+                                 ("ring_planet", "ring", r.teeth * a / (2 * math.pi))):
+            spec = _alternation(alt, mesh_alternation, kind, frac)
+            if te[kind]:
+                spec.setdefault("phase", frac)  # also the transmission error's phase
+            m.add(Mesh(f"{gear}_{pl}", gear, pl, k_sp if kind == "sun_planet" else k_rp,
+                       backlash, mesh_damping, side=-1, role=kind, planet=pl,
+                       transmission_error=te[kind], **spec))
     m.groups["planets"] = [f"planet{n}" for n in range(1, n_planets + 1)]
     m.output = "sun"
     return m.check()

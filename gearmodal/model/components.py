@@ -108,6 +108,10 @@ class Body:
     thickness_error : tooth thickness error of a body that meshes, m, along the line of
         action (positive: thicker teeth). Each flank stands out by half of it: both flanks'
         gaps of each of its meshes close by half of it, the backlash by all of it.
+    runout : ``(e, phase)``: the eccentricity of the body's teeth, m, turning with its nominal
+        spin (``speed_ratio``), at angle ``phase`` (rad) from its local x axis at input
+        azimuth 0: the gaps of its meshes move by it projected on their lines of action, at
+        the body's rotation order against the mesh (:class:`gearmodal.Mesh`).
     """
 
     name: str = ""
@@ -126,6 +130,7 @@ class Body:
     role: str = ""
     position_error: tuple = (0.0, 0.0)
     thickness_error: float = 0.0
+    runout: tuple = (0.0, 0.0)
 
     def _label(self) -> str:
         return self.name or type(self).__name__
@@ -151,6 +156,12 @@ class Body:
             f"{f}.position_error", e, "m"), "gap") for e in err)
         self.thickness_error = v.plausible(f"{f}.thickness_error", v.number(
             f"{f}.thickness_error", self.thickness_error, "m"), "gap")
+        ro = tuple(self.runout) if isinstance(self.runout, (list, tuple)) else None
+        if ro is None or len(ro) != 2:
+            raise ModelError(f"{f}.runout", f"= {self.runout!r}: expected [eccentricity_m, "
+                             "phase_rad]")
+        self.runout = (v.plausible(f"{f}.runout", v.nonnegative(f"{f}.runout", ro[0], "m"),
+                                   "gap"), v.number(f"{f}.runout", ro[1], "rad"))
         if not isinstance(self.frame, str):
             raise ModelError(f"{f}.frame", f"expected a frame name, got {self.frame!r}")
         pos = tuple(self.position)
@@ -303,6 +314,8 @@ _BODY_FIELDS = (
     Field("thickness_error", "number", "m", default=0.0,
           doc="tooth thickness error on the line of action (positive: thicker)",
           limits="gap"),
+    Field("runout", "vector", lengths=(2,), default=(0.0, 0.0),
+          doc="[eccentricity_m, phase_rad] of the teeth, turning with the body's spin"),
 )
 Frame.SCHEMA = Table("frames", (
     NAME, Field("speed_ratio", "number", default=0.0,

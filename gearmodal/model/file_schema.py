@@ -107,7 +107,11 @@ PLANETARY = Table("planetary stage (`[planetary_stage]` or a `[[stages]]` entry)
               doc="per planet [radial, tangential] carrier pinhole position error"),
         Field("tooth_thickness_errors", "vector", "m", limits="gap",
               doc="per planet tooth thickness error on the line of action (positive: "
-                  "thicker)")))),
+                  "thicker)"))),
+    Field("runout", "table", doc="{sun = [e_m, phase_deg], ring = ..., carrier = ...}: "
+          "eccentricity turning with the body"),
+    Field("transmission_error", "any", doc="[[amplitude_m, phase_deg], ...] harmonics of the "
+          "mesh frequency, or {sun_planet = [...], ring_planet = [...]}")),
     "A planetary stage, carrier input.")
 PARALLEL = Table("parallel stage (`[parallel_stage]` or a `[[stages]]` entry)", (
     *_STAGE_COMMON,

@@ -44,6 +44,14 @@ class Mesh:
     module, no profile shift). ``phase`` is the fraction of a mesh period elapsed at input
     azimuth 0 (0 = the start of a double-pair zone). The wave runs on the nominal rotation of
     the gears, so it switches at known times: the exact method switches at them exactly.
+
+    Manufacturing errors (exact: offsets of the flanks' gaps): the gears' ``position_error``
+    and ``thickness_error`` (constant), their ``runout`` (turning with a gear's spin against
+    the frame the mesh's centres turn in, at that relative rotation order), and
+    ``transmission_error``: ``[(amplitude_m, phase_rad), ...]``, harmonics k = 1, 2, ... of the
+    mesh frequency (``gear_a``'s teeth passing the mesh, per input revolution), a displacement
+    ``sum_k A_k cos(k (M psi + 2 pi phase) + phi_k)`` along the line of action that closes the
+    front flank and opens the back one (``M`` the mesh order, ``phase`` as above).
     """
 
     name: str
@@ -64,6 +72,7 @@ class Mesh:
     stage: str = ""
     role: str = ""
     planet: str | None = None
+    transmission_error: tuple = ()
 
     TABLE: ClassVar[str] = "meshes"
     SCHEMA: ClassVar[Table]
@@ -85,6 +94,15 @@ class Mesh:
             raise ModelError(f"{f}.stiffness_ratio", f"= {self.stiffness_ratio!r}: must lie in "
                              "[1, 10] (double-pair over single-pair stiffness)")
         self.phase = v.number(f"{f}.phase", self.phase)
+        te = self.transmission_error
+        if not isinstance(te, (list, tuple)) or not all(
+                isinstance(x, (list, tuple)) and len(x) == 2 for x in te):
+            raise ModelError(f"{f}.transmission_error", f"= {te!r}: expected [[amplitude_m, "
+                             "phase_rad], ...], one pair per harmonic of the mesh frequency")
+        self.transmission_error = tuple(
+            (v.plausible(f"{f}.transmission_error[{i}]", v.nonnegative(
+                f"{f}.transmission_error[{i}]", a, "m"), "gap"),
+             v.number(f"{f}.transmission_error[{i}]", p, "rad")) for i, (a, p) in enumerate(te))
         self.stiffness = v.plausible(f"{f}.stiffness", v.nonnegative(
             f"{f}.stiffness", self.stiffness, "N/m"), "stiffness")
         self.backlash = v.plausible(f"{f}.backlash", v.nonnegative(
@@ -133,18 +151,81 @@ class Mesh:
             raise ModelError(f"{self.name}.backlash", f"= {self.backlash!r} m: the tooth "
                              f"thickness errors of {a.name!r} and {b.name!r} take "
                              f"{2.0 * thick!r} m of it; the backlash must stay >= 0")
+        order, ratio_j = self._mesh_order(ctx, a, b, ca, cb)
         for flank, side, off in (("front", self.side, 0.0), ("back", -self.side,
                                                              self.backlash)):
+            def jac(psi, side=side):
+                pa, pb = ctx.centre(a, psi), ctx.centre(b, psi)
+                return mesh_gap_jacobian(pa[0], pa[1], pb[0], pb[1], rba, rbb, alpha, beta_b,
+                                         float(side), internal)
+
             J = mesh_gap_jacobian(ca[0], ca[1], cb[0], cb[1], rba, rbb, alpha, beta_b,
                                   float(side), internal)
             off = off - thick - float(J[:3] @ ea + J[6:9] @ eb)
+            waves = []
+            for body, sl in ((a, slice(0, 3)), (b, slice(6, 9))):  # run-out: J . e(psi)
+                h, z = _runout_wave(ctx, body, jac, sl, ratio_j)
+                if z:
+                    waves.append((h, -z))
+            sign = 1.0 if flank == "front" else -1.0  # TE closes the front, opens the back
+            for k, (amp, phi) in enumerate(self.transmission_error, start=1):
+                if amp:
+                    z = amp * np.exp(1j * (phi + 2 * np.pi * k * self.phase))
+                    waves.append((k * order, -sign * z))
+            off = off + sum(z.real for h, z in waves if h == 0)  # turning with the mesh
+            waves = [(h, z) if h > 0 else (-h, np.conj(z)) for h, z in waves if h != 0]
+            off = off + sum((z * np.exp(1j * h * ctx.azimuth)).real for h, z in waves)
             w = ctx.row([(a, J[:6]), (b, J[6:])])
             if np.any(w):
                 variation = variation_of(model, self, a, b, bool(internal)) \
                     if self.alternation else None
                 ctx.contact(w, off, self.stiffness, self.damping, flank == "front", self,
                             flank, "mesh", columns=[(f"{self.name}.{flank}", 1.0)],
-                            variation=variation)
+                            variation=variation, waves=waves)
+
+
+    def _mesh_order(self, ctx, a, b, ca, cb) -> tuple[float, float]:
+        """``(M, r_J)``: the mesh order (``gear_a``'s teeth passing the mesh per input
+        revolution; 0 when not needed or not a gear) and the speed ratio of the frame the
+        mesh's centres turn in (the frame of the gear off the axis)."""
+        off_a, off_b = np.hypot(*ca[:2]) > 0.0, np.hypot(*cb[:2]) > 0.0
+        fa, fb = ctx.model.frames[a.frame], ctx.model.frames[b.frame]
+        if off_a and off_b and fa.speed_ratio != fb.speed_ratio:
+            ratio_j = math.nan  # centres turning against each other: no fixed mesh frame
+        else:
+            ratio_j = (fa if off_a else fb).speed_ratio
+        needs = any(amp for amp, _ in self.transmission_error)
+        if not needs:
+            return 0.0, ratio_j
+        teeth = getattr(a, "teeth", 0)
+        if not teeth or math.isnan(ratio_j):
+            raise ModelError(f"{self.name}.transmission_error", "needs gear_a with teeth "
+                             "(a gm.Gear) on a mesh whose centres turn in one frame")
+        return teeth * abs(a.speed_ratio - ratio_j), ratio_j
+
+
+def _runout_wave(ctx, body, jac, sl: slice, ratio_j: float) -> tuple[float, complex]:
+    """``(h, z)`` of ``body``'s run-out on a flank: ``J(psi) . e(psi) = Re(z e^(i h psi))``
+    with ``e`` turning with the body's spin and the flank's gradient ``J`` (``jac(psi)``)
+    with the mesh's frame: one harmonic of order ``h`` = the spin against that frame, ``z``
+    from two evaluations a quarter period apart; ``(0, 0)`` without run-out."""
+    e, phase = getattr(body, "runout", (0.0, 0.0))
+    if not e:
+        return 0.0, 0j
+    if math.isnan(ratio_j):
+        raise ModelError(f"{body.name}.runout", "on a mesh whose centres turn against each "
+                         "other: not modelled")
+    h = body.speed_ratio - ratio_j
+
+    def value(psi):
+        d = rz(body.speed_ratio * psi + body.orientation + phase) @ np.array([e, 0.0, 0.0])
+        return float(jac(psi)[sl] @ d)
+
+    psi1 = ctx.azimuth
+    if h == 0.0:  # turning with the mesh: a constant offset (Re z at h = 0)
+        return 0.0, complex(value(psi1))
+    v1, v2 = value(psi1), value(psi1 + math.pi / (2.0 * h))
+    return h, complex(v1, -v2) * np.exp(-1j * h * psi1)
 
 
 def _centre_error(ctx, body) -> np.ndarray:
@@ -184,5 +265,7 @@ Mesh.SCHEMA = Table("meshes", (
           doc="double-pair over single-pair stiffness"),
     Field("phase", "number", default=0.0,
           doc="fraction of a mesh period elapsed at input azimuth 0"),
-    *STRUCTURE, Field("planet", "name", doc="the planet this mesh belongs to")),
+    *STRUCTURE, Field("planet", "name", doc="the planet this mesh belongs to"),
+    Field("transmission_error", "pairs", default=(),
+          doc="[[amplitude_m, phase_rad], ...]: harmonics 1, 2, ... of the mesh frequency")),
     "A gear mesh with two compression-only flanks and backlash (`[[meshes]]`).")

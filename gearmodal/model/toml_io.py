@@ -401,7 +401,29 @@ def _planetary(path: str, value, in_drivetrain: bool = False) -> Model:
             mesh_stiffness=k, backlash=t["backlash"], mesh_damping=t["mesh_damping"],
             dofs=t["dofs"], planet_angles=angles, mesh_alternation=t["mesh_alternation"],
             pin_errors=t.get("pin_errors"),
-            tooth_thickness_errors=t.get("tooth_thickness_errors"), **supports)
+            tooth_thickness_errors=t.get("tooth_thickness_errors"),
+            runout=_degrees_pairs(_join(path, "runout"), t.get("runout"), table=True),
+            transmission_error=_degrees_pairs(_join(path, "transmission_error"),
+                                              t.get("transmission_error")), **supports)
+
+
+def _degrees_pairs(path: str, value, table: bool = False):
+    """``[a, phase_deg]`` pairs (a list, or a table of lists) with the phase in radians, for
+    the builders; other shapes go through for the builder to refuse by name."""
+    def conv(p, x):
+        if isinstance(x, list) and len(x) == 2:
+            return [x[0], math.radians(v.number(f"{p}[1]", x[1], "deg"))]
+        return x
+
+    if value is None:
+        return None
+    if isinstance(value, dict):
+        return {k: (conv(_join(path, k), x) if table else
+                    [conv(f"{_join(path, k)}[{i}]", y) for i, y in enumerate(x)]
+                    if isinstance(x, list) else x) for k, x in value.items()}
+    if isinstance(value, list) and not table:
+        return [conv(f"{path}[{i}]", x) for i, x in enumerate(value)]
+    return value
 
 
 def _parallel(path: str, value, in_drivetrain: bool = False) -> Model:
