@@ -1,6 +1,6 @@
 """Constant torque with gravity: the earlier study the paper cites (its Figure 4, Parker et al.
 2006). The 600 kW planetary stage (studies/models/planetary_clearance.toml) at rated torque
-with the shaft-end force of the rotor weight and the weights of its wheels, turned slowly
+with the shaft-end force of the rotor weight and gravity on every body, turned slowly
 through one carrier revolution: the static equilibrium with its contact state at every carrier
 azimuth, with and without double contact.
 
@@ -29,7 +29,7 @@ from gearmodal.turbine import load_turbine
 HERE = Path(__file__).resolve().parent
 MODEL = HERE / "models" / "planetary_clearance.toml"
 TURBINE = HERE / "turbines" / "600kw_turbine.toml"
-G = 9.81  # m/s^2
+G = gm.G_STANDARD  # m/s^2
 TORQUE = 2.6e5  # N m: 600 kW at 22 rpm
 # carrier bearing per case: the reference's, or (None) the model file's own 'clearance' fault
 BEARINGS = {"without": 1.0e9, "with": None}
@@ -37,15 +37,11 @@ BEARINGS = {"without": 1.0e9, "with": None}
 
 def loads(model, torque: float = TORQUE) -> dict:
     """Rated torque on the carrier, the sun's balancing torque, the rotor weight carried at the
-    shaft end (the front main bearing is the pivot: up at the gearbox) and the wheels'
-    weights, N and N m."""
+    shaft end (the front main bearing is the pivot: up at the gearbox) and gravity on every
+    body of the stage (the load ``gravity``), N, N m and m/s^2."""
     tb = load_turbine(TURBINE)
     shaft_end = tb.rotor.mass * G * tb.front_bearing / (tb.rear_bearing - tb.front_bearing)
-    f = {"carrier.torque": torque, "carrier.force_y": shaft_end - model.bodies["carrier"].mass * G}
-    for name in model.dof_names:
-        body = name.split(".")[0]
-        if body.startswith(("planet", "sun")) and name.endswith(".theta"):
-            f[f"{body}.force_y"] = -model.bodies[body].mass * G
+    f = {"carrier.torque": torque, "carrier.force_y": shaft_end, "gravity": G}
     return gm.balance(model, f, on="sun.torque")
 
 
@@ -134,7 +130,7 @@ def run(out, *, step_deg: float = 2.0, torque_fractions=(0.05, 0.1, 0.25, 0.5, 1
     verdict = ("agrees with" if 1.5 <= factor <= 2.0 else "does not agree with")
     write_study_report(out, "Constant torque with gravity (paper, Figure 4)", [
         f"Static equilibrium of the 600 kW planetary stage at rated torque ({TORQUE:.3g} N m) "
-        "with the rotor weight at the shaft end and the wheels' weights, at every "
+        "with the rotor weight at the shaft end and gravity on every body, at every "
         f"{step_deg:g} deg of carrier azimuth.", summary,
         f"Planet-bearing load increase factor with double contact: {factor:.2f}. This "
         f"{verdict} the earlier study's factor of about 1.75 quoted by the paper, whose "
