@@ -113,7 +113,7 @@ TURBINE = Table("turbine", (
     Field("rebase_angle", "number", "rad", low=0.0, low_open=True, high=1.0,
           doc="rigid rotation that re-bases it (default 5e-4)"),
     Field("gravity", "boolean", default=True,
-          doc="the weight of every gearbox body, along the model's tilt_deg")),
+          doc="the weight of every gearbox body, along the turbine file's tilt_deg")),
     "The turbine in wind, simulated with the gearbox of scene.model.")
 #: the scene file's tables
 TABLES = ("scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind")

@@ -19,7 +19,8 @@ SUMMARY_COLUMNS = ["max_front_force_N", "max_back_force_N", "double_contact_time
                    "double_contact_two_planets_time_s", "max_planet_bearing_force_N",
                    "peak_load_sharing_factor", "max_front_force_sun_planet_N",
                    "max_back_force_sun_planet_N", "max_front_force_ring_planet_N",
-                   "max_back_force_ring_planet_N", "n_events"]
+                   "max_back_force_ring_planet_N", "k_gamma_sun_planet", "k_gamma_ring_planet",
+                   "n_events"]
 
 
 # -- what a case reports ----------------------------------------------------------------------
@@ -54,6 +55,9 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
       load (:meth:`~gearmodal.SimulationResult.load_sharing`) over the times at which the
       stage carries at least ``loaded_fraction`` of its largest total load (shares of a
       nearly unloaded, rattling stage are meaningless);
+    - ``k_gamma_sun_planet``, ``k_gamma_ring_planet``: the standards' load-sharing factor of
+      the stage over the run (:meth:`~gearmodal.SimulationResult.k_gamma`: the largest
+      planet's mean mesh load over the mean);
     - ``n_events``; for a turbine run also ``cut_in_time_s`` and ``mean_power_W`` (after
       cut-in).
 
@@ -101,6 +105,10 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
     total = sum(f[c] - f[c[:-len("front")] + "back"] for c in sp)
     loaded = np.abs(total) >= loaded_fraction * float(np.abs(total).max())
     out["peak_load_sharing_factor"] = float(fac[loaded].max())
+    kg = sim.k_gamma()
+    for role in ("sun_planet", "ring_planet"):
+        row = kg[(kg.stage == name) & (kg.mesh == role)]
+        out[f"k_gamma_{role}"] = float(row.k_gamma.iloc[0]) if len(row) else math.nan
     out["n_events"] = int(len(sim.events))
     if hasattr(result, "turbine"):
         cut = result.cut_in_time

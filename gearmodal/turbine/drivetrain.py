@@ -227,8 +227,8 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         the reference azimuth, so this bounds how far it lags the true carrier angle.
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``; ``options`` go to it (refused if it
         does not take them).
-    gravity : the weight of every gearbox body (the model's load ``gravity`` along its
-        ``tilt_deg``): True (standard gravity, 9.80665 m/s^2), False, or g in m/s^2.
+    gravity : the weight of every gearbox body (the model's load ``gravity``, along the
+        turbine's ``tilt_deg``): True (standard gravity, 9.80665 m/s^2), False, or g in m/s^2.
     progress : ``progress(i, n)`` per aerodynamic step (the solver never prints).
     """
     for label, val in (("t_end", t_end), ("dt", dt), ("aero_dt", aero_dt),
@@ -258,6 +258,9 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         wind._turbulence()
         clock["wind_setup_s"] = time.process_time() - tw
 
+    if g and getattr(gearbox, "tilt_deg", 0.0) != turbine.tilt_deg:
+        gearbox = gearbox.copy()  # gravity along the turbine's shaft tilt
+        gearbox.tilt_deg = turbine.tilt_deg
     geo = AzimuthAssembler(gearbox)
     # the start is a static equilibrium and the gearbox runs piecewise linear
     geo.template.require_piecewise_linear("the turbine co-simulation (its start is a static "

@@ -52,7 +52,9 @@ class Turbine:
     """A stall-regulated turbine. rotor : :class:`Rotor`. generator :
     :class:`InductionGenerator`. gear_ratio : generator / rotor speed. inertia : drivetrain
     inertia at the rotor, kg m^2. hub_height, front_bearing, rear_bearing : m.
-    mounting_azimuth_deg : azimuth of planet 1 relative to blade 1 (deg)."""
+    mounting_azimuth_deg : azimuth of planet 1 relative to blade 1 (deg). tilt_deg : shaft
+    tilt, the rotor end up (deg): the direction of gravity on the gearbox's bodies in a turbine
+    run (the gearbox model's own ``tilt_deg`` is replaced by it)."""
 
     rotor: Rotor
     generator: InductionGenerator
@@ -62,6 +64,7 @@ class Turbine:
     front_bearing: float = 1.0
     rear_bearing: float = 2.6
     mounting_azimuth_deg: float = 0.0
+    tilt_deg: float = 0.0
     name: str = "turbine"
 
     def __post_init__(self):
@@ -110,7 +113,10 @@ TURBINE_FILE = {
         Field("rear_bearing", "number", "m", low=0.0, low_open=True, default=REQUIRED,
               doc="rear main bearing (the gearbox), beyond the front one"),
         Field("mounting_azimuth_deg", "number", "deg", default=0.0,
-              doc="planet 1 relative to blade 1")), "The turbine."), True),
+              doc="planet 1 relative to blade 1"),
+        Field("tilt_deg", "number", "deg", low=-30.0, high=30.0, default=0.0,
+              doc="shaft tilt, rotor end up: the direction of gravity on the gearbox "
+                  "bodies")), "The turbine."), True),
     "rotor": (Table("rotor", (
         Field("radius", "number", "m", low=0.0, low_open=True, default=REQUIRED,
               doc="tip radius"),
@@ -190,7 +196,7 @@ def _turbine(d: dict, default_name: str) -> Turbine:
                    gear_ratio=t["gear_ratio"], inertia=t["inertia"],
                    hub_height=t["hub_height"], front_bearing=t["front_bearing"],
                    rear_bearing=t["rear_bearing"],
-                   mounting_azimuth_deg=t["mounting_azimuth_deg"],
+                   mounting_azimuth_deg=t["mounting_azimuth_deg"], tilt_deg=t["tilt_deg"],
                    name=t.get("name", default_name))
 
 
