@@ -22,12 +22,13 @@ from scipy.optimize import linear_sum_assignment
 
 from .assembly import reduction
 from .errors import ModelError
-from .modal import RPM, eigensolve
+from .modal import RPM, eigensolve, geometry_table
 from .model.components import Gear
 from .model.model import Model
 from .model.validate import plausible
 from .modetypes import LOOSE, QUIET, classify
 from .result_io import read_header, write_header
+from .whirl import log_decrement, translation_pairs, whirl
 
 #: layout version of :meth:`CampbellResult.save` (``result.json``)
 SAVE_VERSION = 1
@@ -78,6 +79,11 @@ def default_orders(model: Model) -> dict[str, float]:
     return orders
 
 
+#: the logarithmic decrements the colour scales span: from -1/5 of the top (unstable, red)
+#: through 0 (yellow) to the top (green)
+LOG_DEC_SCALE = (-0.1, 0.5)
+
+
 @dataclass
 class CampbellResult:
     """Tracked natural frequencies over a speed sweep.
@@ -92,6 +98,8 @@ class CampbellResult:
     veering : (n_speeds, n_modes) True at the speed where a mode veers (see :meth:`veerings`).
     orders : excitation orders ``{name: multiple of input speed}``.
     speed_range_rpm : operating range used to mark crossings.
+    whirl : (n_speeds, n_modes) ``forward``/``backward``/``linear``/``""`` of each tracked mode
+        (:mod:`gearmodal.whirl`; ``""`` everywhere without the model's geometry).
     """
 
     speeds_rpm: np.ndarray
@@ -104,14 +112,25 @@ class CampbellResult:
     speed_range_rpm: tuple | None = None
     model_name: str = ""
     extra: dict = field(default_factory=dict)
+    whirl: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.whirl is None:
+            self.whirl = np.full(self.frequencies_hz.shape, "", dtype=object)
 
     @property
     def n_modes(self) -> int:
         return self.frequencies_hz.shape[1]
 
+    @property
+    def log_decrements(self) -> np.ndarray:
+        """(n_speeds, n_modes) logarithmic decrements of the tracked modes
+        (:func:`gearmodal.whirl.log_decrement`)."""
+        return log_decrement(self.damping_ratios)
+
     def to_frame(self) -> pd.DataFrame:
         """Long table: ``speed_rpm``, ``mode``, ``frequency_hz``, ``damping_ratio``,
-        ``mode_type``, ``veering``."""
+        ``mode_type``, ``veering``, ``log_dec``, ``whirl``."""
         ns, nm = self.frequencies_hz.shape
         return pd.DataFrame({
             "speed_rpm": np.repeat(self.speeds_rpm, nm),
@@ -120,6 +139,8 @@ class CampbellResult:
             "damping_ratio": self.damping_ratios.ravel(),
             "mode_type": self.mode_types.ravel(),
             "veering": self.veering.ravel(),
+            "log_dec": self.log_decrements.ravel(),
+            "whirl": np.asarray(self.whirl, dtype=object).ravel(),
         })
 
     def veerings(self) -> pd.DataFrame:
@@ -165,24 +186,54 @@ class CampbellResult:
         return pd.DataFrame(rows, columns=cols).sort_values(["speed_rpm", "frequency_hz"],
                                                             ignore_index=True)
 
-    def plot(self, fmax_hz: float | None = None, ax=None, orders=None):
-        """The Campbell diagram (tracked modes coloured by type, order lines dashed, crossings
-        marked, operating range shaded); returns the matplotlib Figure."""
+    def _fmax(self, fmax_hz, names) -> float:
+        if fmax_hz is not None:
+            return fmax_hz
+        top = max(self.orders[o] for o in names) * self.speeds_rpm.max() / 60.0
+        return min(max(1.2 * top, 1.0), 1.05 * np.nanmax(self.frequencies_hz))
+
+    def plot(self, fmax_hz: float | None = None, ax=None, orders=None,
+             color_by: str = "type"):
+        """The Campbell diagram (tracked modes coloured by type, or by their logarithmic
+        decrement with ``color_by="log_dec"``: red below zero (unstable), yellow near zero
+        (lightly damped), green well damped; order lines dashed, crossings marked, operating
+        range shaded); returns the matplotlib Figure."""
         import matplotlib.pyplot as plt
 
+        if color_by not in ("type", "log_dec"):
+            raise ModelError("color_by", f"= {color_by!r}: must be 'type' or 'log_dec'")
         if ax is None:
             fig, ax = plt.subplots(figsize=(8, 5.5))
         else:
             fig = ax.figure
         s = self.speeds_rpm
         names = list(self.orders) if orders is None else list(orders)
-        if fmax_hz is None:
-            top = max(self.orders[o] for o in names) * s.max() / 60.0
-            fmax_hz = min(max(1.2 * top, 1.0), 1.05 * np.nanmax(self.frequencies_hz))
+        fmax_hz = self._fmax(fmax_hz, names)
         types = sorted(set(self.mode_types.ravel()))
         colours = {t: f"C{i % 10}" for i, t in enumerate(types)}
         seen = set()
-        for j in range(self.n_modes):
+        if color_by == "log_dec":
+            from matplotlib.collections import LineCollection
+            from matplotlib.colors import TwoSlopeNorm
+
+            norm = TwoSlopeNorm(vmin=-LOG_DEC_SCALE[1] / 5, vcenter=0.0, vmax=LOG_DEC_SCALE[1])
+            dec = np.clip(self.log_decrements, -LOG_DEC_SCALE[1] / 5, LOG_DEC_SCALE[1])
+            lc = None
+            for j in range(self.n_modes):
+                f = self.frequencies_hz[:, j]
+                if np.all(f > fmax_hz):
+                    continue
+                if self.mode_types[len(s) // 2, j] == "rigid":  # no decay to read
+                    ax.plot(s, f, color="0.7", lw=0.8)
+                    continue
+                seg = np.stack([np.column_stack([s[:-1], f[:-1]]),
+                                np.column_stack([s[1:], f[1:]])], axis=1)
+                lc = LineCollection(seg, cmap="RdYlGn", norm=norm, lw=1.6)
+                lc.set_array(0.5 * (dec[:-1, j] + dec[1:, j]))
+                ax.add_collection(lc)
+            if lc is not None:
+                fig.colorbar(lc, ax=ax, label="logarithmic decrement", extend="both")
+        for j in range(self.n_modes) if color_by == "type" else ():
             f = self.frequencies_hz[:, j]
             if np.all(f > fmax_hz):
                 continue
@@ -214,6 +265,66 @@ class CampbellResult:
         fig.tight_layout()
         return fig
 
+    def plot_interactive(self, fmax_hz: float | None = None, orders=None,
+                         links: dict | None = None):
+        """The Campbell diagram as a plotly Figure (the ``interactive`` extra): each tracked
+        mode a line whose points are coloured by their logarithmic decrement (red: unstable,
+        yellow: lightly damped, green: well damped); hovering a point shows the mode, its type,
+        frequency, damping ratio, logarithmic decrement and whirl; order lines dashed,
+        crossings in the operating range marked. ``links``: ``{mode: anchor}`` put in each
+        point's ``customdata`` (the report jumps to the mode's drawn shape on a click)."""
+        try:
+            import plotly.graph_objects as go
+        except ImportError:
+            raise ModelError("plotly", "is not installed: the interactive Campbell diagram "
+                             "needs the 'interactive' extra (pip install gearmodal"
+                             "[interactive])") from None
+        s = self.speeds_rpm
+        names = list(self.orders) if orders is None else list(orders)
+        fmax_hz = self._fmax(fmax_hz, names)
+        dec = self.log_decrements
+        shown = np.clip(dec, -LOG_DEC_SCALE[1] / 5, LOG_DEC_SCALE[1])
+        fig = go.Figure()
+        for j in range(self.n_modes):
+            f = self.frequencies_hz[:, j]
+            if np.all(f > fmax_hz):
+                continue
+            link = (links or {}).get(j, "")
+            custom = np.column_stack([np.full(len(s), j), self.mode_types[:, j],
+                                      self.damping_ratios[:, j], dec[:, j],
+                                      np.asarray(self.whirl, dtype=object)[:, j],
+                                      np.full(len(s), link)])
+            fig.add_trace(go.Scatter(
+                x=s, y=f, mode="lines+markers", name=f"mode {j}", customdata=custom,
+                line={"color": "rgba(120,120,120,0.5)", "width": 1},
+                marker={"size": 5, "color": shown[:, j], "coloraxis": "coloraxis"},
+                hovertemplate=("mode %{customdata[0]} (%{customdata[1]})<br>"
+                               "%{y:.4g} Hz at %{x:.4g} rpm<br>damping ratio "
+                               "%{customdata[2]:.3g}, log dec %{customdata[3]:.3g}<br>whirl "
+                               "%{customdata[4]}<extra></extra>")))
+        for o in names:
+            fig.add_trace(go.Scatter(x=s, y=self.orders[o] * s / 60.0, mode="lines", name=o,
+                                     line={"dash": "dash", "color": "#555", "width": 1},
+                                     hoverinfo="name"))
+        cr = self.crossings(names)
+        cr = cr[cr.in_operating_range & (cr.frequency_hz <= fmax_hz)]
+        if len(cr):
+            fig.add_trace(go.Scatter(x=cr.speed_rpm, y=cr.frequency_hz, mode="markers",
+                                     name="crossing in operating range",
+                                     marker={"color": "crimson", "size": 8,
+                                             "symbol": "circle-open"}))
+        fig.update_layout(
+            title=f"Campbell diagram {self.model_name}".strip(),
+            xaxis_title="input speed [rpm]", yaxis_title="natural frequency [Hz]",
+            yaxis_range=[0, fmax_hz], showlegend=False, template="plotly_white",
+            coloraxis={"colorscale": "RdYlGn", "cmin": -LOG_DEC_SCALE[1] / 5, "cmid": 0.0,
+                       "cmax": LOG_DEC_SCALE[1],
+                       "colorbar": {"title": {"text": "log dec"}}})
+        if self.speed_range_rpm:
+            fig.add_vrect(x0=self.speed_range_rpm[0], x1=self.speed_range_rpm[1],
+                          fillcolor="#eee", opacity=0.5, line_width=0, layer="below")
+        return fig
+
     def save(self, directory) -> Path:
         """Write ``campbell.csv``, ``crossings.csv``, ``mac.npz``, ``campbell.json``,
         ``campbell.npz`` (the tracked arrays, exact) and ``result.json``: what :meth:`load`
@@ -229,7 +340,8 @@ class CampbellResult:
              "speeds_rpm": [float(x) for x in self.speeds_rpm]}, indent=2))
         arrays = {"speeds_rpm": self.speeds_rpm, "frequencies_hz": self.frequencies_hz,
                   "damping_ratios": self.damping_ratios, "veering": self.veering,
-                  "mode_types": np.asarray(self.mode_types, dtype=str)}
+                  "mode_types": np.asarray(self.mode_types, dtype=str),
+                  "whirl": np.asarray(self.whirl, dtype=str)}
         extra = {}
         for key, val in self.extra.items():
             if isinstance(val, np.ndarray):
@@ -262,7 +374,8 @@ class CampbellResult:
                    mode_types=z["mode_types"].astype(object), macs=list(z["macs"]),
                    veering=z["veering"], orders=dict(head["orders"]),
                    speed_range_rpm=tuple(rng) if rng is not None else None,
-                   model_name=head["model"], extra=extra)
+                   model_name=head["model"], extra=extra,
+                   whirl=z["whirl"].astype(object) if "whirl" in z else None)
 
 
 def _plain(x):
@@ -364,6 +477,12 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
             progress(i + 1, s.size)
     base = model.merged if isinstance(model, Coupled) else model
     order_map = default_orders(base) if orders is None else dict(orders)
+    geometry = geometry_table(base)
+    whirls = np.full((s.size, n), "", dtype=object)
+    if geometry is not None:  # the orbits of the body centres, in the original coordinates
+        pairs = translation_pairs(geometry, list(asm.dof_names))
+        for i, phi in enumerate(shapes):
+            whirls[i] = whirl(phi if N is None else N @ phi, pairs)
     found = _find_veerings(s, freqs, shapes, M)
     veer = np.zeros((s.size, n), dtype=bool)
     for i, a, b, *_ in found:
@@ -371,6 +490,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     return CampbellResult(speeds_rpm=s, frequencies_hz=freqs, damping_ratios=zetas,
                           mode_types=types, macs=macs, veering=veer, orders=order_map,
                           speed_range_rpm=model.speed_range_rpm, model_name=model.name,
+                          whirl=whirls,
                           extra={"veerings": [(s[i], a, b, fr, gap, m)
                                               for i, a, b, fr, gap, m in found],
                                  "states": np.array(states)})

@@ -22,6 +22,7 @@ from .errors import ModelError
 from .frames import centre
 from .model.validate import plausible
 from .result_io import read_csv, read_header, write_header
+from .whirl import log_decrement, translation_pairs, whirl
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 #: layout version of :meth:`ModalResult.save` (``result.json``)
@@ -73,7 +74,9 @@ class ModalResult:
 
     def to_frame(self) -> pd.DataFrame:
         """One row per mode: ``mode``, ``frequency_hz``, ``damping_ratio``, ``mode_type``,
-        ``dominant_body`` (largest kinetic energy share) and that share."""
+        ``dominant_body`` (largest kinetic energy share) and that share, ``log_dec`` (the
+        logarithmic decrement) and ``whirl`` (``forward``/``backward``/``linear``, ``""`` for
+        modes without translation or without the model's geometry; :mod:`gearmodal.whirl`)."""
         ke = self.kinetic_energy
         return pd.DataFrame({
             "mode": np.arange(self.n_modes),
@@ -83,7 +86,16 @@ class ModalResult:
             "mode_type": self.mode_types,
             "dominant_body": ke.idxmax(axis=1).to_numpy() if ke.shape[1] else "",
             "dominant_share": ke.max(axis=1).to_numpy() if ke.shape[1] else np.nan,
+            "log_dec": log_decrement(self.damping_ratios),
+            "whirl": self.whirl(),
         })
+
+    def whirl(self) -> np.ndarray:
+        """Whirl direction of each mode (:func:`gearmodal.whirl.whirl`): from the orbits of
+        the body centres of :attr:`geometry`; ``""`` for every mode without it."""
+        if self.geometry is None:
+            return np.full(self.n_modes, "", dtype=object)
+        return whirl(self.shapes, translation_pairs(self.geometry, list(self.dof_names)))
 
     def shape(self, i: int) -> pd.Series:
         """Mode ``i``'s shape as a Series indexed by DOF name (real part after phase

@@ -58,6 +58,58 @@ def _shape_figures(res: ModalResult, out: Path) -> list[tuple[str, str]]:
     return figs
 
 
+def _all_shapes(res: ModalResult, skip=()) -> str:
+    """Every other non-rigid mode's drawn shape (not in ``skip``), each under an anchor
+    ``mode-XX`` (the interactive Campbell diagram's points link there), in a ``<details>``."""
+    parts = []
+    for i, t in enumerate(res.mode_types):
+        if t == "rigid" or i in skip:
+            continue
+        fig = res.plot_shape(i)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=55)
+        plt.close(fig)
+        b64 = base64.b64encode(buf.getvalue()).decode()
+        parts.append(f"<div id='mode-{i:02d}' class='shape'><h3>Mode {i}: "
+                     f"{res.frequencies_hz[i]:.4g} Hz, {html.escape(t)}</h3>"
+                     f"<img alt='mode {i}' src='data:image/png;base64,{b64}'></div>")
+    return ("<details id='all-shapes'><summary>The other modes drawn (a click on a point of "
+            "the interactive diagram opens its mode here)</summary>" + "".join(parts)
+            + "</details>")
+
+
+def _interactive(camp: CampbellResult, res: ModalResult) -> str:
+    """The interactive Campbell diagram (plotly, inline) with each tracked mode linked to the
+    drawn shape of the mode nearest in frequency at the report's speed; a note when plotly
+    is not installed (the ``interactive`` extra)."""
+    try:
+        import plotly  # noqa: F401
+    except ImportError:
+        return ("<p>(The interactive diagram needs the <code>interactive</code> extra: "
+                "<code>pip install gearmodal[interactive]</code>.)</p>")
+    k = int(abs(camp.speeds_rpm - res.speed_rpm).argmin())
+    links = {}
+    for j in range(camp.n_modes):
+        i = int(abs(res.frequencies_hz - camp.frequencies_hz[k, j]).argmin())
+        if res.mode_types[i] != "rigid":
+            links[j] = f"mode-{i:02d}"
+    fig = camp.plot_interactive(links=links)
+    div = fig.to_html(full_html=False, include_plotlyjs=True, div_id="campbell-interactive")
+    click = """<script>
+document.getElementById('campbell-interactive').on('plotly_click', function (ev) {
+  var p = ev.points[0], a = p.customdata && p.customdata[5];
+  if (!a) { return; }
+  var el = document.getElementById(a);
+  if (el && el.closest('details')) { el.closest('details').open = true; }
+  location.hash = a;
+});
+</script>"""
+    return ("<h2>Interactive Campbell diagram</h2><p>Hover a point: mode, type, frequency, "
+            "damping ratio, logarithmic decrement and whirl; colour: logarithmic decrement "
+            "(red unstable, yellow lightly damped, green well damped). Click a point for the "
+            "mode's drawn shape.</p>" + div + click)
+
+
 def write_modal_report(res: ModalResult, out, summary: str = "") -> Path:
     """Write ``modes.csv``, shape tables, mode-shape figures and ``report.html`` to ``out``."""
     out = Path(out)
@@ -78,8 +130,10 @@ def write_modal_report(res: ModalResult, out, summary: str = "") -> Path:
 def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
                           summary: str = "") -> Path:
     """Write the Campbell report into ``out``: ``campbell.csv``, ``crossings.csv``,
-    ``modes.csv``, ``campbell.png``, ``mode_XX.png`` and a self-contained ``report.html``
-    (model summary, modes at rated speed, crossings with those inside the operating range
+    ``modes.csv``, ``campbell.png``, ``mode_XX.png``, ``shape_XX.png`` (every mode drawn) and a
+    self-contained ``report.html`` (model summary, the static and, with plotly installed, the
+    interactive diagram whose points link to the drawn modes, modes at rated speed with their
+    whirl and logarithmic decrement, crossings with those inside the operating range
     highlighted)."""
     out = Path(out)
     camp.save(out)
@@ -110,6 +164,7 @@ def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
             f"({len(camp.speeds_rpm)} speeds); operating range {rng_txt}. Modes tracked by "
             "mass-weighted MAC with one-to-one assignment.</p>",
             f"<img alt='campbell' src='data:image/png;base64,{cpng}'>",
+            _interactive(camp, res),
             "<h2>Low-frequency zoom: rotor orders and the gearbox housing modes</h2>",
             f"<img alt='campbell_low' src='data:image/png;base64,{lpng}'>",
             "<h3>Gearbox housing modes (housing on its suspension)</h3>",
@@ -126,7 +181,9 @@ def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
             _table(cr, highlight=cr.in_operating_range) if len(cr) else "<p>none</p>",
             f"<h2>Modes at {res.speed_rpm:g} rpm</h2>", _table(modes),
             "<h2>Lowest mode shapes</h2><div class='figs'>",
-            *[f"<img alt='{n}' src='data:image/png;base64,{b}'>" for n, b in figs], "</div>"]
+            *[f"<img id='mode-{n[5:7]}' alt='{n}' src='data:image/png;base64,{b}'>"
+              for n, b in figs], "</div>",
+            _all_shapes(res, skip={int(n[5:7]) for n, _ in figs})]
     (out / "report.html").write_text(_page(camp.model_name, body))
     return out
 
