@@ -74,6 +74,20 @@ def _run(argv: list[str], log: Path) -> None:
         raise RuntimeError(f"gearmodal {' '.join(argv)} failed (exit {rc}): {tail[0]}")
 
 
+#: the interactive Campbell diagram of the 600 kW drivetrain (plotly, its script from the CDN)
+INTERACTIVE = "600kw_campbell_interactive.html"
+
+
+def interactive_campbell(folder: Path, path: Path) -> Path:
+    """The interactive Campbell diagram of the saved Campbell result in ``folder`` as a page
+    at ``path`` (plotly's script loaded from its CDN: a page of the documentation site)."""
+    from .campbell import CampbellResult
+
+    fig = CampbellResult.load(folder).plot_interactive(fmax_hz=60.0)
+    fig.write_html(path, include_plotlyjs="cdn", full_html=True)
+    return path
+
+
 def mode_shapes(out: Path, frames: int = 16) -> list[Path]:
     """Draw :data:`MODE_SHAPES` (a PNG each, and the animated ones as a GIF) into ``out``."""
     import matplotlib
@@ -130,6 +144,11 @@ def docs_figures(out, *, quick: bool = False, work=None, progress=None) -> list[
             written.append(out / fig.name)
             if progress:
                 progress(fig.name, time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        campbell_dir = done[tuple([*FIGURES[0].args, *(FIGURES[0].quick if quick else ())])]
+        written.append(interactive_campbell(campbell_dir, out / INTERACTIVE))
+        if progress:
+            progress(INTERACTIVE, time.perf_counter() - t0)
         t0 = time.perf_counter()
         written += mode_shapes(out, frames=8 if quick else 16)
         if progress:

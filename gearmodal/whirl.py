@@ -15,8 +15,8 @@ are those of the coordinates as modelled: in the carrier frame for a planetary s
 (Lin & Parker's frame), in the ground for the housing and parallel stages.
 
 **Logarithmic decrement** ``delta = 2 pi zeta / sqrt(1 - zeta^2)`` (the decay of successive
-peaks of a free vibration, ``ln(x_k / x_(k+1))``); infinite for ``|zeta| >= 1``; negative for an
-unstable mode.
+peaks of a free vibration, ``ln(x_k / x_(k+1))``); negative for an unstable mode; NaN for
+``|zeta| >= 1`` (a real root: no oscillation, no successive peaks).
 """
 
 from __future__ import annotations
@@ -32,11 +32,11 @@ TRANSLATION = 1e-2
 
 
 def log_decrement(zeta) -> np.ndarray:
-    """``2 pi zeta / sqrt(1 - zeta^2)`` elementwise; ``+-inf`` where ``|zeta| >= 1``."""
+    """``2 pi zeta / sqrt(1 - zeta^2)`` elementwise; NaN where ``|zeta| >= 1``."""
     z = np.asarray(zeta, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = 2.0 * np.pi * z / np.sqrt(1.0 - z * z)
-    return np.where(np.abs(z) >= 1.0, np.copysign(np.inf, z), out)
+    return np.where(np.abs(z) >= 1.0, np.nan, out)
 
 
 def translation_pairs(geometry, dof_names: list[str]) -> np.ndarray:

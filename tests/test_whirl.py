@@ -64,4 +64,4 @@ def test_log_decrement_is_the_decay_of_successive_peaks():
     top = b + (a - cc) ** 2 / (8 * (2 * b - a - cc))
     measured = np.log(top[:-1] / top[1:])
     np.testing.assert_allclose(measured, mode.log_dec, rtol=1e-4)
-    assert log_decrement(1.0) == math.inf and log_decrement(-0.1) < 0
+    assert math.isnan(log_decrement(1.0)) and log_decrement(-0.1) < 0

@@ -129,15 +129,18 @@ def write_modal_report(res: ModalResult, out, summary: str = "") -> Path:
 
 def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
                           summary: str = "") -> Path:
-    """Write the Campbell report into ``out``: ``campbell.csv``, ``crossings.csv``,
-    ``modes.csv``, ``campbell.png``, ``mode_XX.png``, ``shape_XX.png`` (every mode drawn) and a
-    self-contained ``report.html`` (model summary, the static and, with plotly installed, the
+    """Write the Campbell report into ``out``: the Campbell result (``campbell.csv``,
+    ``crossings.csv``...: :meth:`CampbellResult.load` reads ``out`` back), the modal result at
+    the report's speed in ``out/modal`` (and its ``modes.csv`` in ``out``), ``campbell.png``,
+    ``mode_XX.png`` and a self-contained ``report.html`` (model summary, every mode drawn, the
+    static and, with plotly installed, the
     interactive diagram whose points link to the drawn modes, modes at rated speed with their
     whirl and logarithmic decrement, crossings with those inside the operating range
     highlighted)."""
     out = Path(out)
-    camp.save(out)
-    res.save(out)
+    res.save(out / "modal")  # loads back: ModalResult.load(out / "modal")
+    camp.save(out)  # loads back: CampbellResult.load(out)
+    res.to_frame().to_csv(out / "modes.csv", index=False)
     fig = camp.plot()
     cpng = _png(fig, out / "campbell.png")
     low_orders = [o for o in camp.orders if o in ("1P", "3P") or "planet pass" in o
