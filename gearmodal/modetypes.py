@@ -10,7 +10,6 @@ it) and ``mixed``; ``rigid`` for modes at (near) zero frequency.
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 
 #: share of kinetic energy below which a DOF group counts as at rest (exact structure)
 QUIET = 1e-6
@@ -58,6 +57,10 @@ def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e
         central[i] = leaf in ("carrier", "sun", "ring")
     housing = np.array([b == "housing" or b.endswith(".housing") for b in body])
     has_planets = planet.any()
+    # the stages in sorted order (as a groupby would list them) and each DOF's stage index
+    stages, stage_idx = np.unique(np.array(stage_of, dtype=object).astype(str),
+                                  return_inverse=True)
+    in_stages = [stage_idx == k for k in range(len(stages))]
     types = []
     for m in range(shapes.shape[1]):
         em = e[:, m]
@@ -69,8 +72,9 @@ def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e
             continue
         if has_planets:
             # Lin & Parker types, judged on the stage holding most of the energy
-            stage = pd.Series(em).groupby(pd.Series(stage_of)).sum().idxmax()
-            in_stage = np.array([s == stage for s in stage_of])
+            # the stage with the most energy (the first of equals, in sorted order)
+            in_stage = in_stages[int(np.argmax(np.bincount(stage_idx, weights=em,
+                                                           minlength=len(stages))))]
             c, p = central & in_stage, planet & in_stage
             if (c | p).any() and em[c | p].sum() > 0.5:
                 if em[c].sum() < QUIET:
