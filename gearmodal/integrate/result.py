@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ModelError
+from ..fatigue import N_REF, WOEHLER, damage_equivalent_load
 from ..result_io import read_csv, read_header, write_header
 from ..sharing import MESH_ROLES, k_gamma_table
 
@@ -314,6 +315,29 @@ class SimulationResult:
         out.insert(1, "t_start", edges[out["window"].to_numpy()])
         out.insert(2, "t_end", edges[out["window"].to_numpy() + 1])
         return out
+
+    def damage_equivalent_loads(self, n_ref: float = N_REF,
+                                woehler: dict | None = None) -> pd.DataFrame:
+        """Damage-equivalent loads (:mod:`gearmodal.fatigue`, (F1)) of every flank force
+        (``<mesh>.front``/``.back``, with the tooth-root and the tooth-flank exponents) and
+        every planet bearing's radial force (``<bearing>.radial``, the bearing exponent),
+        one row each: ``load``, ``kind``, ``m``, ``del_N`` at ``n_ref`` cycles. ``woehler``
+        overrides :data:`gearmodal.fatigue.WOEHLER`."""
+        ex = {**WOEHLER, **(woehler or {})}
+        f = self.forces
+        rows = []
+        for m in self.meshes():
+            for side in ("front", "back"):
+                col = f"{m}.{side}"
+                for kind in ("tooth_root", "tooth_flank"):
+                    rows.append((col, kind, ex[kind],
+                                 damage_equivalent_load(f[col], ex[kind], n_ref)))
+        for b in self.elements_of("planet_bearing"):
+            if f"{b}.x" in f.columns and f"{b}.y" in f.columns:
+                radial = np.hypot(f[f"{b}.x"], f[f"{b}.y"])
+                rows.append((f"{b}.radial", "bearing", ex["bearing"],
+                             damage_equivalent_load(radial, ex["bearing"], n_ref)))
+        return pd.DataFrame(rows, columns=["load", "kind", "m", "del_N"])
 
     def to_frame(self) -> pd.DataFrame:
         """Displacements and contact forces side by side, indexed by time."""

@@ -1,0 +1,65 @@
+"""Fatigue loads (gearmodal.fatigue, issue 22 item 1) against closed forms: the rainflow count
+of the ASTM E1049 textbook sequence, the DEL of a cosine, the LDD and LRD of a constant torque,
+the ISO 281 rating life of a constant and of a two-level load."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import gearmodal as gm
+from gearmodal import fatigue
+
+
+def test_rainflow_count_of_the_astm_textbook_sequence():
+    """ASTM E1049-85, Fig. 6: ranges 3, 4, 6, 8, 9 with counts 0.5, 1.5, 0.5, 1.0, 0.5."""
+    c = fatigue.rainflow_cycles([-2, 1, -3, 5, -1, 3, -4, 4, -2])
+    got = c.groupby("range")["count"].sum().to_dict()
+    assert got == {3.0: 0.5, 4.0: 1.5, 6.0: 0.5, 8.0: 1.0, 9.0: 0.5}
+
+
+@pytest.mark.parametrize("m", [3.0, 8.7, 13.2])
+def test_del_of_a_cosine(m):
+    """n periods of A cos: n cycles of range 2A, so DEL = 2 A (n / n_ref)^(1/m) (F1)."""
+    A, n, n_ref = 3.0e4, 50, 1e7
+    t = np.linspace(0.0, n, 40 * n + 1)
+    got = fatigue.damage_equivalent_load(A * np.cos(2 * np.pi * t), m, n_ref)
+    assert got == pytest.approx(2 * A * (n / n_ref) ** (1 / m), rel=1e-6)
+
+
+def test_ldd_and_lrd_of_a_constant_torque():
+    T, rpm, d = 2.6e5, 22.0, 30.0
+    load = pd.Series(np.full(301, T), index=np.linspace(0.0, d, 301))
+    edges = [0.0, 1e5, 2e5, 3e5]
+    ldd = fatigue.load_duration(load, edges)
+    lrd = fatigue.load_revolutions(load, rpm, edges)
+    np.testing.assert_allclose(ldd.time_s, [0.0, 0.0, d], rtol=1e-12)
+    np.testing.assert_allclose(lrd.revolutions, [0.0, 0.0, rpm * d / 60.0], rtol=1e-12)
+
+
+def test_rating_life_of_a_constant_and_a_two_level_load():
+    C, p, rpm = 5e5, 10 / 3, 300.0
+    t = np.linspace(0.0, 10.0, 1001)
+    life = fatigue.rating_life(pd.Series(np.full(t.size, 1e5), index=t), rpm, C, p)
+    assert life["l10_million_revolutions"] == pytest.approx((C / 1e5) ** p, rel=1e-12)
+    assert life["l10_h"] == pytest.approx(1e6 * (C / 1e5) ** p / (60 * rpm), rel=1e-12)
+    two = np.where(np.arange(t.size) < 500, 1e5, 2e5)[:-1]  # equal time at each level
+    two = pd.Series(two, index=t[:-1])
+    eq = fatigue.rating_life(two, rpm, C, p)["equivalent_load_N"]
+    assert eq == pytest.approx(((1e5**p + 2e5**p) / 2) ** (1 / p), rel=1e-12)
+
+
+def test_damage_equivalent_loads_of_a_run_and_bad_input():
+    stage = gm.examples.planetary_stage(
+        ring_support={"stiffness": {"x": 1e9, "y": 1e9, "theta": 1e9}})
+    loads = gm.balance(stage, {"carrier.torque": 2e3}, on="sun.torque")
+    sim = gm.simulate(stage, 0.02, dt=1e-4, loads=loads, speed_rpm=300.0)
+    d = sim.damage_equivalent_loads()
+    assert set(d.kind) == {"tooth_root", "tooth_flank", "bearing"}
+    row = d[(d.load == "sun_planet1.front") & (d.kind == "tooth_root")].iloc[0]
+    assert row.del_N == pytest.approx(
+        fatigue.damage_equivalent_load(sim.forces["sun_planet1.front"], 8.7), rel=1e-12)
+    with pytest.raises(gm.ModelError, match="m"):
+        fatigue.damage_equivalent_load([0.0, 1.0, 0.0], 0.5)
+    with pytest.raises(gm.ModelError, match="C"):
+        fatigue.rating_life(pd.Series([1.0, 2.0], index=[0.0, 1.0]), 10.0, -1.0)
+    assert np.isfinite(d.del_N).all() and (d.del_N >= 0).all()
