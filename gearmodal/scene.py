@@ -211,7 +211,8 @@ class Scene:
             tb.update(self.drivetrain)
             tb["mounting_azimuth_deg"] = self.turbine.mounting_azimuth_deg
             doc["turbine"] = tb
-            doc["wind"] = dataclasses.asdict(self.wind)
+            doc["wind"] = {k: v for k, v in dataclasses.asdict(self.wind).items()
+                           if v is not None}
         return doc
 
     def simulate(self, progress=None):

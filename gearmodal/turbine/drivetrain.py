@@ -249,11 +249,11 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         raise ModelError("gravity", f"= {gravity!r}: true, false or g in m/s^2 (0 to 100)")
     if not (isinstance(rotor_speed0_rpm, (int, float)) and rotor_speed0_rpm >= 0):
         raise ModelError("rotor_speed0_rpm", f"= {rotor_speed0_rpm!r}: must be >= 0 rpm")
-    if wind.turbulence_intensity > 0 and wind.duration < t_end:
+    if wind.turbulent and wind.duration < t_end:
         raise ModelError("wind.duration", f"= {wind.duration}: shorter than t_end = {t_end}")
     cpu0 = time.process_time()
     clock = {"aero_s": 0.0, "wind_s": 0.0, "wind_setup_s": 0.0}
-    if wind.turbulence_intensity > 0:
+    if wind.turbulent:
         tw = time.process_time()
         wind._turbulence()
         clock["wind_setup_s"] = time.process_time() - tw

@@ -289,7 +289,7 @@ def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 
     if dt > turbine.inertia / c_gen:
         raise ModelError("dt", f"= {dt!r}: longer than the generator's slip time constant "
                          f"{turbine.inertia / c_gen:.3g} s; the explicit step would be unstable")
-    if wind.turbulence_intensity > 0 and wind.duration < t_end:
+    if wind.turbulent and wind.duration < t_end:
         raise ModelError("wind.duration", f"= {wind.duration}: shorter than t_end = {t_end}")
     rot = turbine.rotor
     n = int(math.ceil(t_end / dt - 1e-9))

@@ -1,11 +1,19 @@
 """Wind at the rotating blade elements: mean speed with power-law shear, tower shadow and 3D
 turbulence (DESIGN 2.5).
 
-Turbulence comes from PyConTurb (J. Rinker, DTU Wind Energy; ``pip install gearmodal[wind]``):
-a Kaimal spectrum with IEC 61400-1 Ed. 4 coherence on a square grid over the rotor, seeded so
-that runs repeat. Between grid points the field is interpolated bilinearly, between time samples
-linearly. Axes (nonrotating, at the hub): ``x`` downwind along the shaft, ``z`` up, ``y``
-completing a right-handed set; ``z`` below is measured from the ground.
+Turbulence (``pip install gearmodal[wind]``), seeded so that runs repeat, on a square grid over
+the rotor: ``model = "kaimal"`` (default) from PyConTurb (J. Rinker, DTU Wind Energy), a Kaimal
+spectrum with IEC 61400-1 Ed. 4 coherence; ``model = "mann"`` from DTU's hipersim, Mann's
+(1994) uniformly sheared spectral tensor, the model HAWC2 uses, generated as a box along the
+wind and swept past the rotor at the mean speed (Taylor's frozen turbulence), with length scale
+``mann_length_scale`` (default IEC 61400-1: 0.8 Lambda_1, Lambda_1 = 0.7 min(hub height, 60 m)),
+anisotropy ``mann_gamma`` (3.9) and either ``mann_alphaeps`` (``alpha eps^(2/3)``, m^(4/3)/s^2)
+or, by default, scaled so that the longitudinal standard deviation over the box is
+``turbulence_intensity`` times the mean speed (the box's lateral and vertical deviations follow
+from the tensor: about 0.7 and 0.5 of it, IEC 61400-1 Annex C). Between grid points the field
+is interpolated bilinearly, between time samples linearly. Axes (nonrotating, at the hub):
+``x`` downwind along the shaft, ``z`` up, ``y`` completing a right-handed set; ``z`` below is
+measured from the ground.
 
 Tower shadow: potential flow around the tower cylinder (radius ``tower_radius``) with the rotor
 ``tower_distance`` upstream of the tower axis: ``u / U = 1 - a^2 (x^2 - y^2) / (x^2 + y^2)^2``
@@ -38,6 +46,9 @@ class Wind:
     half_width : m, the grid covers ``hub +- half_width`` (set it to ~1.1 rotor radii).
     grid_points : points per side of the turbulence grid.
     tower_radius : m (0: no tower shadow). tower_distance : m from rotor plane to tower axis.
+    model : ``"kaimal"`` or ``"mann"`` (module docstring). mann_length_scale : m (None: IEC).
+    mann_gamma : Mann's anisotropy. mann_alphaeps : ``alpha eps^(2/3)`` (None: scale to the
+    turbulence intensity).
     """
 
     mean_speed: float = 10.0
@@ -51,8 +62,19 @@ class Wind:
     grid_points: int = 7
     tower_radius: float = 1.0
     tower_distance: float = 2.5
+    model: str = "kaimal"
+    mann_length_scale: float | None = None
+    mann_gamma: float = 3.9
+    mann_alphaeps: float | None = None
 
     def __post_init__(self):
+        if self.model not in ("kaimal", "mann"):
+            raise ModelError("wind.model", f"= {self.model!r}: must be 'kaimal' or 'mann'")
+        for label, val, lo, hi in (("mann_length_scale", self.mann_length_scale, 1.0, 1e3),
+                                   ("mann_gamma", self.mann_gamma, 0.0, 10.0),
+                                   ("mann_alphaeps", self.mann_alphaeps, 1e-6, 100.0)):
+            if val is not None and not (isinstance(val, (int, float)) and lo <= val <= hi):
+                raise ModelError(f"wind.{label}", f"= {val!r}: must be in [{lo}, {hi}]")
         for label, val, lo, hi in (("mean_speed", self.mean_speed, 0.0, 60.0),
                                    ("hub_height", self.hub_height, 1.0, 500.0),
                                    ("shear_exponent", self.shear_exponent, 0.0, 1.0),
@@ -70,6 +92,11 @@ class Wind:
             raise ModelError("wind.grid_points", f"= {self.grid_points!r}: at least 2")
         self._box = None
 
+    @property
+    def turbulent(self) -> bool:
+        """True when the wind has turbulence (an intensity, or Mann's alpha eps^(2/3))."""
+        return self.turbulence_intensity > 0 or self.mann_alphaeps is not None
+
     def __getstate__(self):
         """Pickle without the turbulence box: a cache rebuilt from the seed on first use, so
         that a pickled (or fingerprinted) wind is the same before and after a run."""
@@ -84,8 +111,10 @@ class Wind:
             z = self.hub_height + np.linspace(-self.half_width, self.half_width, ny)
             nt = int(np.ceil(self.duration / self.dt)) + 1
             t = np.arange(nt) * self.dt
-            if self.turbulence_intensity == 0.0:
+            if not self.turbulent:
                 box = np.zeros((nt, 3, ny, ny))
+            elif self.model == "mann":
+                box = self._mann_box(nt, ny, float(y[1] - y[0]))
             else:
                 try:
                     from pyconturb import gen_spat_grid, gen_turb
@@ -106,6 +135,28 @@ class Wind:
             self._box = (t, y, z, box)
         return self._box
 
+    def _mann_box(self, nt: int, ny: int, dy: float) -> np.ndarray:
+        """The Mann box swept past the rotor, (nt, 3, ny, ny): x = U t along the wind."""
+        try:
+            from hipersim import MannTurbulenceField
+        except ImportError as err:  # pragma: no cover - environment
+            raise ModelError("wind.model", "= 'mann' needs hipersim: pip install "
+                             "'gearmodal[wind]'") from err
+        length = self.mann_length_scale
+        if length is None:  # IEC 61400-1: L = 0.8 Lambda_1, Lambda_1 = 0.7 min(z_hub, 60 m)
+            length = 0.8 * 0.7 * min(self.hub_height, 60.0)
+        nx = 1 << max(int(np.ceil(np.log2(nt))), 4)  # the FFT's length, a power of two
+        field = MannTurbulenceField.generate(
+            alphaepsilon=self.mann_alphaeps if self.mann_alphaeps is not None else 1.0,
+            L=length, Gamma=self.mann_gamma, Nxyz=(nx, ny, ny),
+            dxyz=(self.mean_speed * self.dt, dy, dy), seed=int(self.seed))
+        uvw = np.asarray(field.uvw, dtype=float)  # (3, nx, ny, nz): u, v lateral, w up
+        if self.mann_alphaeps is None:  # scaled to the target intensity
+            uvw = uvw * (self.turbulence_intensity * self.mean_speed / uvw[0].std())
+        box = uvw[:, :nt].transpose(1, 0, 2, 3).copy()
+        box -= box.mean(axis=0, keepdims=True)
+        return box
+
     # -- sampling --------------------------------------------------------------------------
     def velocity(self, t: float, y: np.ndarray, z: np.ndarray) -> np.ndarray:
         """Wind velocity (3, ...) = (u downwind, v lateral, w up) in m/s at time ``t`` and
@@ -116,7 +167,7 @@ class Wind:
         u = self.mean_speed * (zc / self.hub_height) ** self.shear_exponent
         out = np.zeros((3, *y.shape))
         out[0] = u
-        if self.turbulence_intensity > 0:
+        if self.turbulent:
             tt, gy, gz, box = self._turbulence()
             if t > tt[-1] + 1e-9:
                 raise ModelError("wind.duration", f"= {self.duration}: the run reached t = "
@@ -163,5 +214,13 @@ Wind.SCHEMA = Table("wind", (
     Field("tower_radius", "number", "m", low=0.0, high=20.0, default=1.0,
           doc="tower radius (0: no tower shadow)"),
     Field("tower_distance", "number", "m", low=0.0, low_open=True, default=2.5,
-          doc="rotor plane to tower axis")),
+          doc="rotor plane to tower axis"),
+    Field("model", "choice", choices=("kaimal", "mann"), default="kaimal",
+          doc="turbulence model: Kaimal (PyConTurb) or Mann (hipersim, as HAWC2)"),
+    Field("mann_length_scale", "number", "m", low=1.0, high=1e3,
+          doc="Mann length scale L (default IEC: 0.8 x 0.7 min(hub height, 60 m))"),
+    Field("mann_gamma", "number", low=0.0, high=10.0, default=3.9,
+          doc="Mann anisotropy Gamma"),
+    Field("mann_alphaeps", "number", "m^(4/3)/s^2", low=1e-6, high=100.0,
+          doc="Mann alpha eps^(2/3) (default: scaled to turbulence_intensity)")),
     "Wind of a turbine scene (`gearmodal.turbine.Wind`).")
