@@ -20,6 +20,8 @@ frame against fixed supports are frozen at the input azimuth given to :func:`ass
 
 from __future__ import annotations
 
+import pickle
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -258,17 +260,77 @@ class Assembly:
         return f
 
 
-def as_assembly(model) -> tuple[Assembly, str]:
+def as_assembly(model, cached: bool = False) -> tuple[Assembly, str]:
     """``(assembly, model name)`` of a :class:`~gearmodal.Model` or a :class:`gearmodal.Coupled`
     system (anything with ``assemble()``, assembled at azimuth 0) or of an already assembled
-    :class:`Assembly` (name ``""``)."""
+    :class:`Assembly` (name ``""``). ``cached``: a model's assembly from
+    :func:`cached_assembly` (shared and read-only; for callers that only read it)."""
     if isinstance(model, Assembly):
         return model, ""
+    if cached:
+        key = _fingerprint(model)
+        if key is not None:
+            return _cached(model, 0.0, key), str(getattr(model, "name", ""))
     build = getattr(model, "assemble", None)
     if callable(build):
         return build(), str(getattr(model, "name", ""))
     raise TypeError(f"expected a gm.Model, gm.Coupled or gm.Assembly, got "
                     f"{type(model).__name__}")
+
+
+#: per model object: (fingerprint, azimuth, read-only assembly) of its latest cached assembly
+_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _fingerprint(model) -> bytes | None:
+    """The whole state of a plain :class:`~gearmodal.Model` as bytes (its pickle: every
+    frame, body and element field, nested tables and arrays included), or None when a cached
+    assembly could be stale without the bytes changing: a subclass of Model, a component of a
+    class from outside gearmodal (a user's element kind, whose ``contribute`` may change
+    without its data changing), or anything that does not pickle."""
+    cls = type(model)  # by name: gearmodal.model.model imports this module
+    if (cls.__module__, cls.__qualname__) != ("gearmodal.model.model", "Model"):
+        return None
+    try:
+        parts = [*model.frames.values(), *model.bodies.values(), *model.elements()]
+        if any(not type(c).__module__.startswith("gearmodal.") for c in parts):
+            return None
+        return pickle.dumps(model, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # anything that does not pickle is simply not cached
+        return None
+
+
+def _read_only(asm: Assembly) -> Assembly:
+    """Mark the arrays of ``asm`` (and of its contact tables) read-only, so that code sharing
+    a cached assembly cannot change it for the next caller."""
+    for obj in (asm, asm.contacts, asm.springs, asm.round):
+        if obj is None:
+            continue
+        for val in vars(obj).values():
+            if isinstance(val, np.ndarray):
+                val.flags.writeable = False
+    return asm
+
+
+def cached_assembly(model, azimuth: float = 0.0) -> Assembly:
+    """``assemble(model, azimuth)``, reused while ``model`` is unchanged: the assembly of a
+    model object is kept (weakly: it goes with the model) with the model's whole state
+    (:func:`_fingerprint`), and assembled again as soon as anything in it differs (any
+    field of any frame, body, mesh or bearing, added or removed components). Models that
+    cannot be fingerprinted are assembled every time. The shared assembly's arrays are
+    read-only: callers must not change it (:func:`assemble` gives a private one)."""
+    return _cached(model, azimuth, _fingerprint(model))
+
+
+def _cached(model, azimuth: float, key: bytes | None) -> Assembly:
+    if key is None:
+        return assemble(model, azimuth)
+    hit = _CACHE.get(model)
+    if hit is not None and hit[1] == azimuth and hit[0] == key:
+        return hit[2]
+    asm = _read_only(assemble(model, azimuth))
+    _CACHE[model] = (key, azimuth, asm)
+    return asm
 
 
 def reduction(asm: Assembly) -> tuple[Assembly, np.ndarray | None]:

@@ -9,6 +9,9 @@ it) and ``mixed``; ``rigid`` for modes at (near) zero frequency.
 
 from __future__ import annotations
 
+from functools import lru_cache
+from typing import NamedTuple
+
 import numpy as np
 
 #: share of kinetic energy below which a DOF group counts as at rest (exact structure)
@@ -22,6 +25,46 @@ def dof_energy(asm, shapes: np.ndarray) -> np.ndarray:
     e = np.real(shapes.conj() * (asm.M @ shapes))
     tot = e.sum(axis=0, keepdims=True)
     return np.divide(e, tot, out=np.zeros_like(e), where=tot > 0)
+
+
+class _Groups(NamedTuple):
+    """The DOF groups :func:`classify` sums the kinetic energy over, from the DOF names."""
+
+    rot: np.ndarray  # indices of the rotational coordinates (theta, u)
+    housing: np.ndarray  # indices of the housing's coordinates
+    has_housing: bool
+    has_planets: bool
+    stage_idx: np.ndarray  # each DOF's stage, as an index into the sorted stage names
+    n_stages: int
+    #: per stage: whether it has central members or planets, and the DOF indices of those,
+    #: of its central members, of their translations and of their rotations
+    stage_masks: list
+
+
+@lru_cache(maxsize=64)
+def _groups(names: tuple) -> _Groups:
+    rot = np.array([n.rsplit(".", 1)[1] in ("theta", "u") for n in names], dtype=bool)
+    body = [n.rsplit(".", 1)[0] for n in names]
+    planet = np.array([b.rsplit(".", 1)[-1].startswith("planet") for b in body], dtype=bool)
+    stage_of = [b.rsplit(".", 1)[0] if "." in b else "" for b in body]
+    central = np.array([b.rsplit(".", 1)[-1] in ("carrier", "sun", "ring") for b in body],
+                       dtype=bool)
+    housing = np.array([b == "housing" or b.endswith(".housing") for b in body], dtype=bool)
+    # the stages in sorted order (as a groupby would list them) and each DOF's stage index
+    stages, stage_idx = np.unique(np.array(stage_of, dtype=object).astype(str),
+                                  return_inverse=True)
+    stage_idx = stage_idx.reshape(-1)
+    masks = []
+    for k in range(len(stages)):
+        in_stage = stage_idx == k
+        c, p = central & in_stage, planet & in_stage
+        masks.append((bool((c | p).any()), *(np.flatnonzero(x) for x in
+                                             (c | p, c, c & ~rot, c & rot))))
+    rot, housing = np.flatnonzero(rot), np.flatnonzero(housing)
+    for a in (rot, housing, stage_idx, *(x for st in masks for x in st[1:])):
+        a.flags.writeable = False  # shared between calls
+    return _Groups(rot, housing, bool(len(housing)), bool(planet.any()), stage_idx,
+                   len(stages), masks)
 
 
 def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e-6,
@@ -45,58 +88,52 @@ def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e
     num = np.real(np.einsum("im,ij,jm->m", shapes.conj(), K, shapes))
     den = np.real(np.einsum("im,ij,jm->m", shapes.conj(), asm.M, shapes))
     static_hz = np.sqrt(np.clip(num / den, 0, None)) / (2 * np.pi)
-    names = asm.dof_names
+    g = _groups(tuple(asm.dof_names))
     e = dof_energy(asm, shapes)
-    rot = np.array([n.rsplit(".", 1)[1] in ("theta", "u") for n in names])
-    body = [n.rsplit(".", 1)[0] for n in names]
-    planet = np.array([b.rsplit(".", 1)[-1].startswith("planet") for b in body])
-    stage_of = [b.rsplit(".", 1)[0] if "." in b else "" for b in body]
-    central = np.zeros(len(names), dtype=bool)
-    for i, b in enumerate(body):
-        leaf = b.rsplit(".", 1)[-1]
-        central[i] = leaf in ("carrier", "sun", "ring")
-    housing = np.array([b == "housing" or b.endswith(".housing") for b in body])
-    has_planets = planet.any()
-    # the stages in sorted order (as a groupby would list them) and each DOF's stage index
-    stages, stage_idx = np.unique(np.array(stage_of, dtype=object).astype(str),
-                                  return_inverse=True)
-    in_stages = [stage_idx == k for k in range(len(stages))]
+    # row m of E is mode m's DOF shares; each group's share is the 1-D sum over its DOFs of
+    # that row, as before (the same numbers added in the same order: the same labels)
+    E = np.ascontiguousarray(e.T)
+    rigid = (static_hz < rigid_rel * fmax).tolist()
+    if g.has_planets:
+        # the stage with the most energy (the first of equals, in sorted order): per stage
+        # the sum down its DOF rows, in DOF order, as np.bincount(stage_idx, weights=e[:, m])
+        best = np.argmax(np.stack([e[g.stage_idx == k].sum(axis=0)
+                                   for k in range(g.n_stages)]), axis=0).tolist()
     types = []
     for m in range(shapes.shape[1]):
-        em = e[:, m]
-        if static_hz[m] < rigid_rel * fmax:
+        if rigid[m]:
             types.append("rigid")
             continue
-        if housing.any() and em[housing].sum() > 0.5:
+        em = E[m]
+        if g.has_housing and em[g.housing].sum() > 0.5:
             types.append("housing")
             continue
-        if has_planets:
+        if g.has_planets:
             # Lin & Parker types, judged on the stage holding most of the energy
-            # the stage with the most energy (the first of equals, in sorted order)
-            in_stage = in_stages[int(np.argmax(np.bincount(stage_idx, weights=em,
-                                                           minlength=len(stages))))]
-            c, p = central & in_stage, planet & in_stage
-            if (c | p).any() and em[c | p].sum() > 0.5:
-                if em[c].sum() < QUIET:
+            any_cp, cp, c, c_tr, c_rot = g.stage_masks[best[m]]
+            if any_cp and em[cp].sum() > 0.5:
+                e_c = em[c].sum()
+                e_tr = em[c_tr].sum()
+                if e_c < QUIET:
                     types.append("planet")
                     continue
-                if em[c & ~rot].sum() < QUIET * em[c].sum() + QUIET:
+                if e_tr < QUIET * e_c + QUIET:
                     types.append("rotational")
                     continue
-                if em[c & rot].sum() < QUIET * em[c].sum() + QUIET:
+                e_rot = em[c_rot].sum()
+                if e_rot < QUIET * e_c + QUIET:
                     types.append("translational")
                     continue
-                stage_e = em[c | p].sum()
-                if em[c].sum() < LOOSE * stage_e:
+                if e_c < LOOSE * em[cp].sum():
                     types.append("planet")
                     continue
-                if em[c & ~rot].sum() < LOOSE * em[c].sum():
+                if e_tr < LOOSE * e_c:
                     types.append("rotational")
                     continue
-                if em[c & rot].sum() < LOOSE * em[c].sum():
+                if e_rot < LOOSE * e_c:
                     types.append("translational")
                     continue
-        if em[rot].sum() > 0.9:
+        if em[g.rot].sum() > 0.9:
             types.append("torsional")
         else:
             types.append("mixed")
