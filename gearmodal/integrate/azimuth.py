@@ -17,6 +17,7 @@ the check fails (other frame speed ratios) are refused there with a clear error.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 
@@ -91,6 +92,20 @@ class AzimuthAssembler:
         self.exact = all(
             np.allclose(got[k], v, rtol=0, atol=CHECK_RTOL * max(np.abs(v).max(initial=0), 1e-30))
             for k, v in _arrays(check, waves=True).items())
+
+    def with_mass(self, M: np.ndarray) -> AzimuthAssembler:
+        """A copy whose (constant) mass matrix is ``M`` (the mass-scaling rung,
+        :mod:`gearmodal.massscale`); every other field, the loads' masses included, as is."""
+        out = copy.copy(self)
+        out.template = dataclasses.replace(self.template, M=M)
+        out.constant = {**self.constant, "M": M}
+        out.coef = dict(self.coef)
+        a, b = self.coef["M"]
+        a = a.copy()
+        a[0] = M
+        a[1:] = 0.0
+        out.coef["M"] = (a, np.zeros_like(b))
+        return out
 
     def _add_waves(self, waves) -> None:
         """Append the offset waves' orders to the harmonics (every other field zero there):

@@ -63,6 +63,7 @@ from ..errors import ModelError
 from ..integrate import Driver, SimulationResult, build_result, get_method, mesh_stiffness
 from ..integrate.azimuth import AzimuthAssembler
 from ..integrate.system import PiecewiseLinearSystem
+from ..massscale import scaled_mass
 from ..model.components import G_STANDARD, GRAVITY
 from ..result_io import read_header, write_header
 from ..static import equilibrium
@@ -207,6 +208,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                         connected: bool = False, rebase_speed: float = 0.01,
                         rebase_angle: float = 5e-4,
                         method: str = "exact", gravity: bool | float = True,
+                        top_frequency_hz: float | None = None,
                         progress=None, **options) -> DrivetrainResult:
     """Run turbine and gearbox together from ``rotor_speed0_rpm`` for ``t_end`` s.
 
@@ -229,6 +231,11 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         does not take them).
     gravity : the weight of every gearbox body (the model's load ``gravity``, along the
         turbine's ``tilt_deg``): True (standard gravity, 9.80665 m/s^2), False, or g in m/s^2.
+    top_frequency_hz : the mass-scaling rung (:mod:`gearmodal.massscale`): the gearbox's
+        modes above this frequency are slowed to it by added mass along them (stiffness,
+        gaps, loads exact), so the exact method's pieces are longer. ``None`` (default): the
+        full model. Its error on the engineering quantities is measured in
+        ``benchmarks/turbine_speed.py``.
     progress : ``progress(i, n)`` per aerodynamic step (the solver never prints).
     """
     for label, val in (("t_end", t_end), ("dt", dt), ("aero_dt", aero_dt),
@@ -262,6 +269,10 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         gearbox = gearbox.copy()  # gravity along the turbine's shaft tilt
         gearbox.tilt_deg = turbine.tilt_deg
     geo = AzimuthAssembler(gearbox)
+    mass_scaling = None
+    if top_frequency_hz is not None:
+        Ms, mass_scaling = scaled_mass(geo, top_frequency_hz)
+        geo = geo.with_mass(Ms)
     # the start is a static equilibrium and the gearbox runs piecewise linear
     geo.template.require_piecewise_linear("the turbine co-simulation (its start is a static "
                                           "equilibrium)")
@@ -432,6 +443,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 "mounting_azimuth_deg": turbine.mounting_azimuth_deg,
                 "rebase_speed": rebase_speed, "rebase_angle": rebase_angle,
                 "method": method, "options": options, "gravity_mps2": g,
+                "top_frequency_hz": top_frequency_hz, "mass_scaling": mass_scaling,
                 "shaft_end_force": "on the carrier" if bending else "not modelled (the first "
                 "stage's carrier has no translation)",
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
