@@ -19,8 +19,10 @@ from gearmodal.integrate.taylor import (
     N_TERMS,
     REACH,
     TABLE_DEGREE,
+    StateBound,
     TaylorIntegrator,
     _bernstein,
+    _state_rho,
     first_root,
     spectral_bound_all,
     terms_for,
@@ -134,6 +136,26 @@ def test_spectral_bound_holds_for_every_contact_state():
     assert np.abs(np.linalg.eigvals(A)).max() <= bound
     assert worst <= bound
     assert bound < 1.5 * np.abs(np.linalg.eigvals(A)).max()  # and it is not loose
+
+
+def test_per_state_bound_holds_for_its_state_and_never_exceeds_the_global_one():
+    """Each contact state's own bound (StateBound, kappa = 1 on a frozen system) bounds that
+    state's spectral radius, is below the all-states bound, and is tighter for states with
+    few contacts closed (the open stage: its supports only)."""
+    system = PiecewiseLinearSystem(gm.assemble(clearance_stage()), speed_rpm=0.0)
+    rho_all = spectral_bound_all(system)
+    sb = StateBound(system, rho_all)
+    assert sb.enabled and sb.kappa == pytest.approx(1.0)
+    args = sb.args()[1:]
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        s = rng.random(system.n_contacts) < 0.5
+        A, _ = system.first_order(s)
+        rho_s = _state_rho(s, *args[:-1], rho_all, args[-1])
+        assert np.abs(np.linalg.eigvals(A)).max() <= rho_s <= rho_all
+    none = np.zeros(system.n_contacts, dtype=bool)
+    assert _state_rho(none, *args[:-1], rho_all, args[-1]) < 0.5 * rho_all
+    assert len(sb.cache) == 31  # one eigenproblem per state met
 
 
 def _stage_run(**options):

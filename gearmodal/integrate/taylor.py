@@ -542,7 +542,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                dt, h_max,
                terms, tscale, margin, simultaneous, max_events, X, S, EV, n_ev,
                counts, sched_t, sched_e, sched_k, sched_pos,
-               om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT):
+               om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT,
+               reach, per_state, Ksym, Wl, km, c0, kappa, rho_cache):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -623,6 +624,12 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     toggled = 0
     dense = False
     cap = EV.shape[0]
+    rho_all = tscale * reach / TERM_BINS  # the bound over every state
+    h_all = h_max
+    if per_state:
+        rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_cache)
+        h_max = min(reach / rs, dt) if rs > 0.0 else h_all
+        tscale = TERM_BINS * rs / reach
     k = k0
     ip = sched_pos[0]
     n_sched = sched_t.shape[0]
@@ -840,6 +847,10 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     last = e
                     _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKC, acc)
                     toggled += 1
+            if per_state:
+                rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_cache)
+                h_max = min(reach / rs, dt) if rs > 0.0 else h_all
+                tscale = TERM_BINS * rs / reach
             if count > max_events:
                 x[:n] = q
                 x[n:] = v
@@ -863,7 +874,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     return 0, k, n_ev, -1
 
 
-def spectral_bound_all(system) -> float:
+def spectral_bound_all(system, parts: bool = False):
     """A bound of the spectral radius of ``A_s`` valid for every contact state ``s``, 1/s.
 
     As :meth:`PiecewiseLinearSystem.spectral_bound` (``|lam| <= (c + sqrt(c^2 + 4 k)) / 2``
@@ -872,10 +883,10 @@ def spectral_bound_all(system) -> float:
     part plus all contacts of negative coefficient and plus all of positive coefficient (the
     contacts add semidefinite terms of their coefficient's sign; negative ones are the shaping
     ramps of a polygonal clearance), so its extreme eigenvalues lie between theirs; otherwise
-    the triangle inequality over the contacts."""
+    the triangle inequality over the contacts. ``parts``: return the bounds ``(k, c)``."""
     n = system.n
     if n == 0:
-        return 0.0
+        return (0.0, 0.0) if parts else 0.0
     Li = system.Linv
     W = system.W
     Wl = W @ Li.T  # rows L^-1 w_e
@@ -900,7 +911,81 @@ def spectral_bound_all(system) -> float:
 
     k = norm_bound(system.K0, getattr(system, "k_max", system.k))  # alternating meshes: max
     c = norm_bound(system.C0, system.c)
+    if parts:
+        return k, c
     return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
+
+
+#: contacts above which the per-state bound is not kept (its key is a bit mask of the state)
+STATE_BOUND_CONTACTS = 62
+
+
+class StateBound:
+    """Per-contact-state spectral bounds for :func:`taylor_run` (each state's pieces as long as
+    its own fastest mode allows, not the stiffest state's).
+
+    For a state ``s`` the bound is taken as for all states (:func:`spectral_bound_all`) but
+    with only ``s``'s contacts closed, at the azimuth 0 of the geometry, and times
+    ``kappa = rho_all / rho_all(0)``: the ratio of the run's bound over every state (with its
+    margins over the azimuth, the speed re-basing and the turning harmonics) to the same
+    all-states formula at azimuth 0. So ``rho_s <= rho_all`` always, and ``rho_s`` carries the
+    all-states margins. The kernel evaluates it once per state met (an eigenproblem of size
+    ``n``) and caches it by the state's bit mask; the series' tail check guards each piece as
+    before."""
+
+    def __init__(self, system, rho_all: float):
+        f = system.at(0.0) if system.turning else {"K0": system.K0, "C0": system.C0,
+                                                    "W": system.W}
+        Li = system.Linv
+        K = np.asarray(f["K0"], dtype=float)
+        self.enabled = (0 < len(system.k) <= STATE_BOUND_CONTACTS
+                        and np.abs(K - K.T).max(initial=0.0)
+                        <= 1e-12 * np.abs(K).max(initial=1e-300))
+        shim = types.SimpleNamespace(n=system.n, Linv=Li, W=f["W"], K0=K, C0=f["C0"],
+                                     k=system.k, c=system.c,
+                                     k_max=getattr(system, "k_max", system.k))
+        k_all, c0 = spectral_bound_all(shim, parts=True)
+        rho0 = 0.5 * (c0 + math.sqrt(c0 * c0 + 4.0 * k_all))
+        self.kappa = max(float(rho_all) / max(rho0, 1e-300), 1.0)
+        self.c0 = float(c0)
+        A = Li @ K @ Li.T
+        self.Ksym = np.ascontiguousarray(0.5 * (A + A.T))
+        self.Wl = np.ascontiguousarray(np.asarray(f["W"], dtype=float) @ Li.T)
+        self.km = np.ascontiguousarray(np.asarray(shim.k_max, dtype=float))
+        self.cache = numba.typed.Dict.empty(numba.types.int64, numba.types.float64)
+
+    def args(self) -> tuple:
+        """The kernel's arguments (a disabled bound: empty arrays, every state at rho_all)."""
+        if not self.enabled:
+            z = np.zeros((0, 0))
+            return (False, z, z, np.zeros(0), 0.0, 1.0, self.cache)
+        return (True, self.Ksym, self.Wl, self.km, self.c0, self.kappa, self.cache)
+
+
+@numba.njit(cache=True)
+def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, cache):
+    """The bound of contact state ``s`` (:class:`StateBound`), from ``cache`` or computed."""
+    key = np.int64(0)
+    for e in range(s.shape[0]):
+        if s[e]:
+            key |= np.int64(1) << np.int64(e)
+    if key in cache:
+        return cache[key]
+    n = Ksym.shape[0]
+    H = Ksym.copy()
+    for e in range(s.shape[0]):
+        if s[e] and km[e] != 0.0:
+            ke = km[e]
+            for i in range(n):
+                wi = ke * Wl[e, i]
+                if wi != 0.0:
+                    for j in range(n):
+                        H[i, j] += wi * Wl[e, j]
+    lam = np.linalg.eigvalsh(H)
+    kk = max(abs(lam[0]), abs(lam[n - 1]))
+    r = min(rho_all, kappa * 0.5 * (c0 + math.sqrt(c0 * c0 + 4.0 * kk)))
+    cache[key] = r
+    return r
 
 
 #: azimuths at which a turning system's spectral bound is taken (the largest, with a margin)
@@ -957,6 +1042,8 @@ class TaylorIntegrator:
             bound = spectral_bound_turning if system.turning else spectral_bound_all
             self.rho = max(bound(system), 1e-300)
             system.rho_bound = self.rho
+        self.reach = float(reach)
+        self.state_bound = StateBound(system, self.rho)
         self.terms = np.array(_term_table(float(reach), int(n_terms or 0)), dtype=np.int64)
         self.n_terms = int(self.terms[-1])  # the full count, last in the table
         self.tscale = TERM_BINS * self.rho / reach
@@ -996,7 +1083,8 @@ class TaylorIntegrator:
                 sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
                 self.terms, self.tscale, GRAZE_MARGIN,
                 SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts, *sched,
-                sched_pos, sysm.omega, float(azimuth0), *self.turning)
+                sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
+                *self.state_bound.args())
             if status == 0:
                 break
             if status == 1:
