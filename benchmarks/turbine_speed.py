@@ -24,6 +24,11 @@ Studies:
   geometry): the same two runs by that code at its converged refreeze setting (the scene file
   of that checkout: 0.125 deg at 1 ms), back to back in the same session; ``speedup`` is the
   ratio of its CPU time to this code's.
+- ``rung``: the same two runs on the mass-scaling rung (``top_frequency_hz`` = 500 and
+  400 Hz, :mod:`gearmodal.massscale`); ``error``: the largest relative difference of the four
+  engineering quantities of the fidelity ladder (tooth and planet-bearing peaks, double
+  contact time, peak load-sharing factor) from the full model's run (``speed``), ``speedup``
+  its CPU ratio; at 500 Hz also the half step (``error`` against the rung's own run).
 - ``multirate``: on the grid at 22.3 rpm, 2 s: the aerodynamic step 0.02 s with the loads
   interpolated / held / extrapolated, and 0.05 s, against aerodynamics at every gearbox step.
 
@@ -48,6 +53,7 @@ sys.path.insert(0, str(ROOT / "studies"))
 import pandas as pd  # noqa: E402
 
 import gearmodal as gm  # noqa: E402
+from gearmodal.auto import QUANTITIES, difference  # noqa: E402
 from gearmodal.scene import load_scene  # noqa: E402
 from gearmodal.studies import summarize  # noqa: E402
 from gearmodal.turbine import simulate_drivetrain  # noqa: E402
@@ -139,6 +145,28 @@ def main(argv=None) -> int:
                          runs["half step"][0], runs["half step"][1], sc.t_end, err))
         print(rows[-2], rows[-1], sep="\n", flush=True)
         save()
+        full = summarize(res)
+        for f_top in (500.0, 400.0):
+            steps = (("scene", sc.dt), ("half step", sc.dt / 2)) if f_top == 500.0 else \
+                (("scene", sc.dt),)
+            got = {}
+            for label, dt in steps:
+                t = time.process_time()
+                rr = simulate_drivetrain(sc.turbine, sc.wind, sc.model, sc.t_end, dt=dt,
+                                         top_frequency_hz=f_top, **sc.drivetrain)
+                got[label] = (rr, time.process_time() - t)
+            rr, cpu_r = got["scene"]
+            rows.append({**_row("rung", name, f"top_frequency_hz {f_top:g}", rr, cpu_r,
+                                sc.t_end, difference(summarize(rr), full, QUANTITIES)),
+                         "speedup": cpu / cpu_r})
+            if "half step" in got:
+                rh, cpu_h = got["half step"]
+                a, b = summarize(rr), summarize(rh)
+                rows.append(_row("rung", name, f"top_frequency_hz {f_top:g}, dt "
+                                 f"{sc.dt / 2:g} s (half step)", rh, cpu_h, sc.t_end,
+                                 max(abs(a[k] - b[k]) / abs(b[k]) for k in PEAKS)))
+            print(*rows[-len(got):], sep="\n", flush=True)
+            save()
         if args.baseline:
             base = Path(args.baseline).resolve()
             r = subprocess.run([sys.executable, "-c", _CHILD, str(base), json.dumps(over), SCENE],

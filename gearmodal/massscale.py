@@ -14,15 +14,19 @@ The stiffness, every contact's gap and force, the loads (gravity and centrifugal
 the true masses) are untouched: static load paths are exact, the dynamics above ``f_top`` are
 slowed.
 
-Turning geometry: ``M'`` must not depend on the azimuth. The modes are taken of the
-**interior** of the model: every DOF except a *boundary* that covers every turning stiffness
-entry (the housing's translations on the 600 kW drivetrain, where the carrier-frame stage
-meets the ground frame), with the boundary held, in the contact state with every flank named
-``front`` closed (the loaded operating state). The interior's stiffness then does not turn, so
-neither does ``M'``. Two subspaces are protected (``Phi_H`` is taken mass-orthogonal to them,
-so ``M'`` does not change them): the interior's free motions (the drivetrain rotation: its
-inertia stays exact) and its static response to the boundary at every azimuth (the interior
-following the housing: the gearbox translation modes near 10 Hz stay exact).
+Turning geometry: ``M'`` must not depend on the azimuth. The modes are taken of an
+**interior**: every DOF except a *boundary* that covers every turning stiffness entry, with the
+boundary held, in the contact state with every flank named ``front`` closed (the loaded
+operating state). The interior's stiffness then does not turn, so neither does ``M'``. Two
+passes: the first holds the smallest such cover (on the 600 kW drivetrain the housing's
+translation, where the carrier-frame stage meets the ground frame), the second the DOFs on the
+other side of the turning entries (the carrier, sun and ring translations), so that the
+housing's own stiff modes (the parallel shafts on their bearings) are slowed too; the second
+pass works on the first's ``M'``. In each pass two subspaces are protected (``Phi_H`` is taken
+mass-orthogonal to them, so ``M'`` does not change them): the interior's free motions (the
+drivetrain rotation: its inertia stays exact) and its static response to the boundary at every
+azimuth (the interior following the housing: the gearbox translation modes near 10 Hz stay
+exact).
 
 What it changes is measured (``benchmarks/turbine_speed.py``, the fidelity ladder): the
 frequencies of the interior's modes above ``f_top`` and the impacts they carry.
@@ -54,10 +58,37 @@ def _boundary(Kturn: np.ndarray) -> list[int]:
     return sorted(cover)
 
 
+def _scale(K: np.ndarray, M: np.ndarray, a, b, bnd: list[int], f_top: float, scale: float):
+    """(S1) on the interior (every DOF but ``bnd``) of stiffness ``K``, mass ``M``; the
+    coupling harmonics ``a``, ``b`` (of ``K``) give the protected static responses.
+    Returns the added mass (n, n) and the slowed frequencies."""
+    n = K.shape[0]
+    ii = np.array([i for i in range(n) if i not in set(bnd)], dtype=int)
+    Kii, Mii = K[np.ix_(ii, ii)], M[np.ix_(ii, ii)]
+    # protected: the interior's static response to the boundary at every azimuth (the
+    # harmonics of the coupling block), and its free motions
+    prot = [sla.null_space(Kii)]
+    for arr in (a, b):
+        for h in range(arr.shape[0]):
+            blk = arr[h][np.ix_(ii, bnd)]
+            if np.abs(blk).max(initial=0.0) > 1e-12 * scale:
+                prot.append(np.linalg.lstsq(Kii, blk, rcond=None)[0])
+    S = np.concatenate(prot, axis=1)
+    Z = sla.null_space((Mii @ S).T) if S.shape[1] else np.eye(len(ii))
+    w, Y = sla.eigh(Z.T @ Kii @ Z, Z.T @ Mii @ Z)
+    V = Z @ Y
+    f = np.sqrt(np.abs(w)) / (2.0 * math.pi)
+    hi = f > f_top
+    MV = Mii @ V[:, hi]
+    dM = np.zeros((n, n))
+    dM[np.ix_(ii, ii)] = (MV * ((f[hi] / f_top) ** 2 - 1.0)) @ MV.T   # (S1)
+    return dM, f[hi].tolist()
+
+
 def scaled_mass(geo, f_top: float) -> tuple[np.ndarray, dict]:
     """``(M', info)`` of (S1) for the azimuth assembler ``geo`` of a model (module
-    docstring). ``info``: ``boundary`` (DOF names held), ``scaled`` (the interior frequencies
-    slowed to ``f_top``, Hz)."""
+    docstring). ``info``: ``boundary`` (the DOF names held in each pass), ``scaled`` (the
+    frequencies slowed to ``f_top`` in each pass, Hz)."""
     if not (isinstance(f_top, (int, float)) and math.isfinite(f_top) and f_top > 0):
         raise ModelError("top_frequency_hz", f"= {f_top!r}: must be a finite frequency > 0 Hz")
     asm = geo.template
@@ -68,36 +99,26 @@ def scaled_mass(geo, f_top: float) -> tuple[np.ndarray, dict]:
         turn = (np.abs(a[1:]).max(axis=0) + np.abs(b[1:]).max(axis=0)) > 1e-12 * scale
     else:
         turn = np.zeros((n, n), dtype=bool)
-    bnd = _boundary(turn)
-    ii = np.array([i for i in range(n) if i not in set(bnd)], dtype=int)
-    if not len(ii):
-        raise ModelError("top_frequency_hz", "every DOF of the model touches a turning entry: "
-                         "there is no interior to scale")
     c = asm.contacts
     front = np.array([name == "front" for name in c.contact], dtype=bool)
     # the operating state: the constant part of the front flanks' rows (a turning row is
     # not part of the interior's stiffness)
     W0 = geo.coef["contacts.W"][0][0] if "contacts.W" in geo.coef else c.W
     K = a[0] + (W0[front].T * c.stiffness[front]) @ W0[front]
-    M = asm.M
-    Kii, Mii = K[np.ix_(ii, ii)], M[np.ix_(ii, ii)]
-    # protected: the interior's static response to the boundary at every azimuth (the
-    # harmonics of the coupling block), and its free motions
-    prot = [sla.null_space(Kii)]
-    if bnd:
-        for arr in (a, b):
-            for h in range(arr.shape[0]):
-                blk = arr[h][np.ix_(ii, bnd)]
-                if np.abs(blk).max(initial=0.0) > 1e-12 * scale:
-                    prot.append(np.linalg.lstsq(Kii, blk, rcond=None)[0])
-    S = np.concatenate(prot, axis=1)
-    Z = sla.null_space((Mii @ S).T) if S.shape[1] else np.eye(len(ii))
-    w, Y = sla.eigh(Z.T @ Kii @ Z, Z.T @ Mii @ Z)
-    V = Z @ Y
-    f = np.sqrt(np.abs(w)) / (2.0 * math.pi)
-    hi = f > f_top
-    MV = Mii @ V[:, hi]
-    Ms = M.copy()
-    Ms[np.ix_(ii, ii)] += (MV * ((f[hi] / f_top) ** 2 - 1.0)) @ MV.T   # (S1)
-    Ms = 0.5 * (Ms + Ms.T)
-    return Ms, {"boundary": [asm.dof_names[i] for i in bnd], "scaled": f[hi].tolist()}
+    # pass 1: the interior of the smallest cover of the turning entries; pass 2 (a turning
+    # model): the interior of the other side, the first boundary's neighbours held
+    covers = [_boundary(turn)]
+    if covers[0]:
+        other = sorted({int(j) for i in covers[0] for j in np.flatnonzero(turn[i] | turn[:, i])}
+                       - set(covers[0]))
+        covers.append(other)
+    Ms = asm.M.copy()
+    info: dict = {"boundary": [], "scaled": []}
+    for bnd in covers:
+        if len(bnd) >= n:
+            continue
+        dM, slowed = _scale(K, Ms, a, b, bnd, f_top, scale)
+        Ms = Ms + dM
+        info["boundary"].append([asm.dof_names[i] for i in bnd])
+        info["scaled"].append(slowed)
+    return 0.5 * (Ms + Ms.T), info

@@ -113,7 +113,10 @@ TURBINE = Table("turbine", (
     Field("rebase_angle", "number", "rad", low=0.0, low_open=True, high=1.0,
           doc="rigid rotation that re-bases it (default 5e-4)"),
     Field("gravity", "boolean", default=True,
-          doc="the weight of every gearbox body, along the turbine file's tilt_deg")),
+          doc="the weight of every gearbox body, along the turbine file's tilt_deg"),
+    Field("top_frequency_hz", "number", "Hz", low=1.0, high=1e5,
+          doc="mass-scaling rung: gearbox modes above it slowed to it (default: none, "
+              "the full model; 500 Hz: 2.6-3.5x faster, peaks within 1.5 %)")),
     "The turbine in wind, simulated with the gearbox of scene.model.")
 #: the scene file's tables
 TABLES = ("scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind")

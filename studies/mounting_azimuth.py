@@ -47,11 +47,12 @@ def _scatter(summary: pd.DataFrame, seeds: int) -> str:
 
 def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int = 1, step_deg: float = 20.0,
         gravity: bool = True, executor=None, progress: bool = True,
-        max_workers: int | None = None) -> pd.DataFrame:
+        max_workers: int | None = None, top_frequency_hz: float | None = None) -> pd.DataFrame:
     """Sweep the mounting azimuth, each with ``seeds`` turbulence seeds from ``seed`` on
     (stored in ``out/store``, resumable). Writes runs.csv (one row per run) and summary.csv
     (per azimuth: the mean over the seeds of each run's peak, and its standard deviation);
-    returns the summary. ``gravity=False`` leaves out the gearbox bodies' weight."""
+    returns the summary. ``gravity=False`` leaves out the gearbox bodies' weight;
+    ``top_frequency_hz`` runs on the mass-scaling rung (:mod:`gearmodal.massscale`)."""
     out = Path(out)
     az = np.arange(0.0, 120.0 + 1e-9, step_deg)
     grid = [(a, seed + k) for a in az for k in range(seeds)]
@@ -59,6 +60,8 @@ def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int = 1, step_deg:
                           "wind.seed": [sd for _, sd in grid], "scene.t_end": duration,
                           "turbine.gravity": gravity})
     cases["model.stages.0.carrier_bearing"] = [CLEARANCE] * len(cases)
+    if top_frequency_hz is not None:
+        cases["turbine.top_frequency_hz"] = float(top_frequency_hz)
     res = gm.sweep(SCENE, cases, executor, store=out / "store", progress=progress,
                    max_workers=max_workers)
     res["azimuth_deg"] = res["turbine.mounting_azimuth_deg"]

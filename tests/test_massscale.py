@@ -38,26 +38,29 @@ def test_modes_below_the_top_keep_their_frequency_and_the_others_drop_to_it():
     K = _front(asm)
     f0 = _hz(K, asm.M)
     Ms, info = scaled_mass(geo, 600.0)
-    assert info["boundary"] == []
+    assert info["boundary"] == [[]]
     f1 = _hz(K, Ms)
     low = f0 < 600.0
     # (free modes: rounding-level eigenvalues, ~1e-5 Hz)
     assert np.allclose(f1[:low.sum()], f0[low], rtol=1e-9, atol=1e-3)
     assert np.allclose(f1[low.sum():], 600.0, rtol=1e-9)
-    assert len(info["scaled"]) == (~low).sum() > 5
+    assert len(info["scaled"][0]) == (~low).sum() > 5
     # the added mass is symmetric positive semi-definite: M' >= M
     assert np.linalg.eigvalsh(Ms - asm.M).min() > -1e-9 * np.abs(asm.M).max()
 
 
 def test_turning_drivetrain_keeps_the_low_modes_at_every_azimuth():
-    """The 600 kW drivetrain turns (carrier frame against the housing): the boundary is the
-    housing's translation, M' is one constant matrix, the drivetrain rotation's inertia is
-    exact, and at every azimuth the modes below half of f_top move by less than 1e-3
-    (measured 8.5e-4) while the fastest mode drops from 3.1 kHz to within 25 % of f_top
-    (measured 612 Hz: the modes the housing couples in are not scaled)."""
+    """The 600 kW drivetrain turns (carrier frame against the housing): the first pass holds
+    the housing's translation, the second the carrier-frame translations it couples to; M' is
+    one constant matrix, the drivetrain rotation's inertia is exact, and at every azimuth the
+    modes below half of f_top move by less than 1e-3 (measured 8.5e-4) while the fastest mode
+    drops from 3.1 kHz to within 10 % of f_top (measured 518 Hz: what couples across the
+    frames is not scaled)."""
     geo = AzimuthAssembler(gm.load(GEARBOX))
     Ms, info = scaled_mass(geo, 500.0)
-    assert info["boundary"] == ["housing.x", "housing.y"]
+    assert info["boundary"][0] == ["housing.x", "housing.y"]
+    assert sorted(info["boundary"][1]) == sorted(
+        f"stage1.{b}.{d}" for b in ("carrier", "sun", "ring") for d in "xy")
     asm = geo.template
     r = gm.turbine.drivetrain.rigid_rotation(asm)
     assert r @ Ms @ r == pytest.approx(r @ asm.M @ r, rel=1e-12)
@@ -66,7 +69,7 @@ def test_turning_drivetrain_keeps_the_low_modes_at_every_azimuth():
         K = _front(a)
         f0, f1 = _hz(K, a.M), _hz(K, Ms)
         assert f0.max() > 3000.0
-        assert f1.max() < 1.25 * 500.0
+        assert f1.max() < 1.1 * 500.0
         low = slice(1, int(np.sum(f0 < 250.0)))  # mode 0 is the free rotation
         assert np.abs(f1[low] / f0[low] - 1).max() < 1e-3
 

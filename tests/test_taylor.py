@@ -151,10 +151,10 @@ def test_per_state_bound_holds_for_its_state_and_never_exceeds_the_global_one():
     for _ in range(30):
         s = rng.random(system.n_contacts) < 0.5
         A, _ = system.first_order(s)
-        rho_s = _state_rho(s, *args[:-1], rho_all, args[-1])
+        rho_s = _state_rho(s, *args[:-2], rho_all, *args[-2:])
         assert np.abs(np.linalg.eigvals(A)).max() <= rho_s <= rho_all
     none = np.zeros(system.n_contacts, dtype=bool)
-    assert _state_rho(none, *args[:-1], rho_all, args[-1]) < 0.5 * rho_all
+    assert _state_rho(none, *args[:-2], rho_all, *args[-2:]) < 0.5 * rho_all
     assert len(sb.cache) == 31  # one eigenproblem per state met
 
 

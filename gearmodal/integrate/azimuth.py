@@ -153,7 +153,7 @@ class AzimuthAssembler:
                                    springs=springs, round=round_, azimuth=float(azimuth))
 
     def spring_forces(self, azimuth: np.ndarray, rate: np.ndarray, Q: np.ndarray,
-                      V: np.ndarray, chunk: int = 2000) -> np.ndarray | None:
+                      V: np.ndarray) -> np.ndarray | None:
         """Forces of the always-active springs at their exact geometry: ``k g + c g'`` with
         ``g = W(psi) q`` and ``g' = W(psi) v + psi' W'(psi) q`` at each row's ``azimuth``
         (rad) and azimuth rate ``rate`` (rad/s); ``None`` when the interpolant is not exact.
@@ -164,18 +164,18 @@ class AzimuthAssembler:
         sp = self.template.springs
         a, b = self.coef["springs.W"]
         hs = self.harmonics
-        out = np.empty((len(azimuth), a.shape[1]))
-        for i in range(0, len(azimuth), chunk):
-            az = np.asarray(azimuth[i:i + chunk], dtype=float)
-            c, s = np.cos(np.outer(az, hs)), np.sin(np.outer(az, hs))
-            W = np.tensordot(c, a, axes=1) + np.tensordot(s, b, axes=1)
-            Wd = np.tensordot(-s * hs, a, axes=1) + np.tensordot(c * hs, b, axes=1)
-            q, v = Q[i:i + chunk], V[i:i + chunk]
-            g = np.einsum("tsn,tn->ts", W, q)
-            gd = (np.einsum("tsn,tn->ts", W, v)
-                  + rate[i:i + chunk, None] * np.einsum("tsn,tn->ts", Wd, q))
-            out[i:i + chunk] = g * sp.stiffness + gd * sp.damping
-        return out
+        az = np.asarray(azimuth, dtype=float)
+        Q, V = np.asarray(Q, dtype=float), np.asarray(V, dtype=float)
+        g = np.zeros((len(az), a.shape[1]))
+        gd = np.zeros_like(g)
+        rate = np.asarray(rate, dtype=float)[:, None]
+        # W(psi) q = sum_h cos(h psi) a_h q + sin(h psi) b_h q: one product per harmonic
+        for h, ah, bh in zip(hs, a, b, strict=True):
+            c, s = np.cos(h * az)[:, None], np.sin(h * az)[:, None]
+            aq, bq = Q @ ah.T, Q @ bh.T
+            g += c * aq + s * bq
+            gd += c * (V @ ah.T) + s * (V @ bh.T) + rate * h * (c * bq - s * aq)
+        return g * sp.stiffness + gd * sp.damping
 
     def load_map(self, azimuth: np.ndarray) -> np.ndarray:
         """``B`` at many azimuths at once, (len(azimuth), n, n_loads)."""

@@ -51,15 +51,18 @@ class PiecewiseLinearSystem:
         (the reference methods).
     spectral_bound : the ``rho_bound`` of a system that differs from this one only in its speed
         terms (1/s), reused with a small margin instead of computing a new bound.
+    state_bound : that system's ``state_bound`` (per contact state), reused likewise.
     """
 
     def __init__(self, asm: Assembly, speed_rpm: float = 0.0, inputs: np.ndarray | None = None,
-                 geometry=None, spectral_bound: float | None = None):
+                 geometry=None, spectral_bound: float | None = None, state_bound=None):
         self.asm = asm
         # a bound of the spectral radius known from a system that differs from this one only
         # in its speed terms (the turbine's re-basing): the Taylor integrator takes it with a
         # margin instead of computing one (taylor.RHO_SPEED)
         self.rho_base = spectral_bound
+        # and its per-state bounds (gearmodal.integrate.taylor.StateBound), likewise reused
+        self.state_bound_base = state_bound
         n = asm.n
         self.n = n
         om = float(speed_rpm) * RPM

@@ -543,7 +543,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                terms, tscale, margin, simultaneous, max_events, X, S, EV, n_ev,
                counts, sched_t, sched_e, sched_k, sched_pos,
                om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT,
-               reach, per_state, Ksym, Wl, km, c0, kappa, rho_cache):
+               reach, per_state, Ksym, Wl, km, c0, kappa, rho_keys, rho_vals):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -627,7 +627,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     rho_all = tscale * reach / TERM_BINS  # the bound over every state
     h_all = h_max
     if per_state:
-        rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_cache)
+        rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
         h_max = min(reach / rs, dt) if rs > 0.0 else h_all
         tscale = TERM_BINS * rs / reach
     k = k0
@@ -848,7 +848,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKC, acc)
                     toggled += 1
             if per_state:
-                rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_cache)
+                rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
                 h_max = min(reach / rs, dt) if rs > 0.0 else h_all
                 tscale = TERM_BINS * rs / reach
             if count > max_events:
@@ -918,6 +918,8 @@ def spectral_bound_all(system, parts: bool = False):
 
 #: contacts above which the per-state bound is not kept (its key is a bit mask of the state)
 STATE_BOUND_CONTACTS = 62
+#: slots of the table of states met (a power of two; when full, bounds are not stored)
+STATE_TABLE = 1024
 
 
 class StateBound:
@@ -930,8 +932,8 @@ class StateBound:
     margins over the azimuth, the speed re-basing and the turning harmonics) to the same
     all-states formula at azimuth 0. So ``rho_s <= rho_all`` always, and ``rho_s`` carries the
     all-states margins. The kernel evaluates it once per state met (an eigenproblem of size
-    ``n``) and caches it by the state's bit mask; the series' tail check guards each piece as
-    before."""
+    ``n``) and keeps it in a table by the state's bit mask; the series' tail check guards
+    each piece as before."""
 
     def __init__(self, system, rho_all: float):
         f = system.at(0.0) if system.turning else {"K0": system.K0, "C0": system.C0,
@@ -952,25 +954,53 @@ class StateBound:
         self.Ksym = np.ascontiguousarray(0.5 * (A + A.T))
         self.Wl = np.ascontiguousarray(np.asarray(f["W"], dtype=float) @ Li.T)
         self.km = np.ascontiguousarray(np.asarray(shim.k_max, dtype=float))
-        self.cache = numba.typed.Dict.empty(numba.types.int64, numba.types.float64)
+        # an open-addressing table of the states met: keys (bit masks, -1 free), bounds
+        self.keys = np.full(STATE_TABLE, -1, dtype=np.int64)
+        self.vals = np.zeros(STATE_TABLE)
+
+    @property
+    def cache(self) -> dict:
+        """The states met so far: ``{bit mask: bound}``."""
+        used = self.keys >= 0
+        return dict(zip(self.keys[used].tolist(), self.vals[used].tolist(), strict=True))
+
+    def rescaled(self, factor: float) -> StateBound:
+        """This bound for a system that differs only in its speed terms (the turbine's
+        re-basing), with the margin ``factor`` (as the all-states bound is reused): the same
+        arrays, ``kappa`` and the cached states' bounds times ``factor``."""
+        out = object.__new__(StateBound)
+        out.__dict__.update(self.__dict__)
+        out.kappa = self.kappa * factor
+        out.keys = self.keys.copy()
+        out.vals = self.vals * factor
+        return out
 
     def args(self) -> tuple:
         """The kernel's arguments (a disabled bound: empty arrays, every state at rho_all)."""
         if not self.enabled:
             z = np.zeros((0, 0))
-            return (False, z, z, np.zeros(0), 0.0, 1.0, self.cache)
-        return (True, self.Ksym, self.Wl, self.km, self.c0, self.kappa, self.cache)
+            return (False, z, z, np.zeros(0), 0.0, 1.0, self.keys, self.vals)
+        return (True, self.Ksym, self.Wl, self.km, self.c0, self.kappa, self.keys, self.vals)
 
 
 @numba.njit(cache=True)
-def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, cache):
-    """The bound of contact state ``s`` (:class:`StateBound`), from ``cache`` or computed."""
+def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, keys, vals):
+    """The bound of contact state ``s`` (:class:`StateBound`), from the table ``keys``,
+    ``vals`` (linear probing) or computed and stored there."""
     key = np.int64(0)
     for e in range(s.shape[0]):
         if s[e]:
             key |= np.int64(1) << np.int64(e)
-    if key in cache:
-        return cache[key]
+    cap = keys.shape[0]
+    slot = -1
+    i = (key * np.int64(0x9E3779B1)) & (cap - 1)
+    for _ in range(cap):
+        if keys[i] == key:
+            return vals[i]
+        if keys[i] < 0:
+            slot = i
+            break
+        i = (i + 1) & (cap - 1)
     n = Ksym.shape[0]
     H = Ksym.copy()
     for e in range(s.shape[0]):
@@ -984,7 +1014,9 @@ def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, cache):
     lam = np.linalg.eigvalsh(H)
     kk = max(abs(lam[0]), abs(lam[n - 1]))
     r = min(rho_all, kappa * 0.5 * (c0 + math.sqrt(c0 * c0 + 4.0 * kk)))
-    cache[key] = r
+    if slot >= 0:
+        keys[slot] = key
+        vals[slot] = r
     return r
 
 
@@ -1038,12 +1070,18 @@ class TaylorIntegrator:
             # eigenvalues; the series' tail check still halves any piece it makes too long
             self.rho = RHO_SPEED * float(base)
             system.rho_bound = float(base)  # passed on as is: margins do not compound
+            sb = getattr(system, "state_bound_base", None)
         else:
             bound = spectral_bound_turning if system.turning else spectral_bound_all
             self.rho = max(bound(system), 1e-300)
             system.rho_bound = self.rho
         self.reach = float(reach)
-        self.state_bound = StateBound(system, self.rho)
+        if base and sb is not None:
+            self.state_bound = sb.rescaled(RHO_SPEED)
+            system.state_bound = sb
+        else:
+            self.state_bound = StateBound(system, self.rho)
+            system.state_bound = self.state_bound
         self.terms = np.array(_term_table(float(reach), int(n_terms or 0)), dtype=np.int64)
         self.n_terms = int(self.terms[-1])  # the full count, last in the table
         self.tscale = TERM_BINS * self.rho / reach

@@ -316,13 +316,17 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         clock["aero_s"] += time.process_time() - tv
         return out
 
-    def reference(om_ref, on_grid, rho=None):
+    def reference(om_ref, on_grid, prev=None):
         """The gearbox system turning at ``om_ref`` (rad/s) with the generator's tangent;
-        ``rho``: the spectral bound of the last system, reused when only the speed drifted
+        ``prev``: the last system, whose spectral bounds (over all states and per state) are
+        reused when only the speed drifted
         (by ``rebase_speed``: the speed terms are soft against the meshes; the integrator adds
         a margin, and the series' tail check halves any piece it makes too long)."""
         T0_, c_gen = gen.tangent(sg * g_ratio * om_ref) if on_grid else (0.0, 0.0)
-        sy = PiecewiseLinearSystem(asm0, om_ref / RPM, geometry=geo, spectral_bound=rho)
+        sy = PiecewiseLinearSystem(
+            asm0, om_ref / RPM, geometry=geo,
+            spectral_bound=None if prev is None else getattr(prev, "rho_bound", None),
+            state_bound=None if prev is None else getattr(prev, "state_bound", None))
         if c_gen:
             sy.add_damping(i_gen, c_gen)  # the generator's tangent slip damping
         sy.use_loads(cols)  # load values in, the turning load map followed exactly
@@ -393,8 +397,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             # has moved by a tenth since it last was; in between the last one serves
             fresh = (system is None or switched
                      or abs(om_f - om_rho) > 0.1 * max(abs(om_rho), 1e-3))
-            system, T0 = reference(om_f, on,
-                                   None if fresh else getattr(system, "rho_bound", None))
+            system, T0 = reference(om_f, on, None if fresh else system)
             if fresh:
                 om_rho = om_f
             if s is None:
