@@ -11,8 +11,12 @@ to the rotor and ``v_t`` in the plane along the blade's direction of motion:
 with solidity ``sigma = B c / (2 pi r)`` and Prandtl's tip and hub loss ``F``; above ``a_c = 0.2``
 the axial induction follows Glauert's correction in Spera's form (M. O. L. Hansen, "Aerodynamics
 of Wind Turbines", 2nd ed., Earthscan 2008, ch. 6, eqs. 6.35-6.38 and 6.40). Quasi-steady: the
-inductions are solved to convergence at every aerodynamic update, starting from the previous
-update's values. Forces per unit length ``0.5 rho W^2 c (Cn, Ct)``.
+inductions are solved to convergence at every aerodynamic update: each element's flow angle
+is the root of the one-equation residual ``sin(phi) U_t - cos(phi) U_x`` (S. A. Ning, "A simple
+solution method for the blade element momentum equations with guaranteed convergence", Wind
+Energy 17, 2014), found by secant and bracketed regula falsi steps next to the previous
+update's angle; where no root is found there, the inductions are iterated (relaxed, to
+``tol``) as a fallback. Forces per unit length ``0.5 rho W^2 c (Cn, Ct)``.
 
 Hub loads (nonrotating axes of :mod:`.wind`, at the rotor centre): thrust ``Fx``, driving torque
 ``Q`` (about the shaft, positive in the direction of rotation), in-plane shear ``Fy``, ``Fz``
@@ -128,56 +132,122 @@ class Rotor:
 
 
 @numba.njit(cache=True)
+def _inductions(phi, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
+    """The inductions ``(a, a')`` that flow angle ``phi`` implies at an element (module
+    docstring: Prandtl's losses, Glauert's correction, the same limits as the iteration)."""
+    ac = 0.2
+    al = (phi - theta + math.pi) % (2.0 * math.pi) - math.pi
+    cl = np.interp(al, pa, pcl)
+    cd = np.interp(al, pa, pcd)
+    sp, cp = math.sin(phi), math.cos(phi)
+    cn = cl * cp + cd * sp
+    ct = cl * sp - cd * cp
+    s = max(abs(sp), 1e-6)
+    f_tip = B * (R - ri) / (2.0 * ri * s)
+    f_hub = B * (ri - rh) / (2.0 * max(rh, 1e-3) * s)
+    F = (4.0 / math.pi**2) * math.acos(math.exp(-f_tip)) * math.acos(math.exp(-f_hub))
+    F = max(F, 1e-4)
+    scn = sigma * cn
+    K = 4.0 * F * sp * sp / (scn if abs(scn) > 1e-12 else 1e-12)
+    an = 1.0 / (K + 1.0)
+    if an > ac:  # Glauert correction, Spera's form (Hansen eq. 6.38)
+        d = (K * (1.0 - 2.0 * ac) + 2.0) ** 2 + 4.0 * (K * ac * ac - 1.0)
+        an = 0.5 * (2.0 + K * (1.0 - 2.0 * ac) - math.sqrt(max(d, 0.0)))
+    sct = sigma * ct
+    den = 4.0 * F * sp * cp / (sct if abs(sct) > 1e-12 else 1e-12)
+    apn = 1.0 / (den - 1.0) if abs(den - 1.0) > 1e-12 else 0.5
+    if not math.isfinite(an):
+        an = 0.0
+    if not math.isfinite(apn):
+        apn = 0.0
+    return min(max(an, -0.5), 0.95), min(max(apn, -0.5), 0.5)
+
+
+@numba.njit(cache=True)
+def _residual(phi, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
+    """``sin(phi) U_t - cos(phi) U_x`` with the inductions ``phi`` implies: zero exactly at
+    the BEM solution (``tan(phi) = U_x / U_t``; Ning 2014's one-equation form)."""
+    a, ap = _inductions(phi, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+    return math.sin(phi) * (wr * (1.0 + ap) - vt) - math.cos(phi) * u * (1.0 - a)
+
+
+@numba.njit(cache=True)
+def _solve_phi(phi0, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
+    """The flow angle near ``phi0`` where :func:`_residual` vanishes: secant steps, kept
+    inside a bracket once the residual has changed sign (Illinois rule); NaN when no root
+    is found within 60 evaluations (the caller then iterates the inductions instead)."""
+    x0 = phi0
+    f0 = _residual(x0, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+    if f0 == 0.0:
+        return x0
+    x1 = x0 + (1e-3 if f0 < 0.0 else -1e-3) * (1.0 if math.cos(x0) > 0.0 else -1.0)
+    f1 = _residual(x1, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+    lo = hi = np.nan
+    flo = fhi = 0.0
+    for _ in range(60):
+        if f1 == 0.0:
+            return x1
+        if not math.isfinite(lo) and f0 * f1 < 0.0:  # a bracket: the residual changes sign
+            lo, flo, hi, fhi = x0, f0, x1, f1
+        if math.isfinite(lo):
+            # regula falsi on the bracket (Illinois: halve the stale end's value)
+            x2 = hi - fhi * (hi - lo) / (fhi - flo)
+            f2 = _residual(x2, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+            if abs(x2 - hi) <= 1e-13 * (1.0 + abs(x2)) or f2 == 0.0:
+                return x2
+            if f2 * fhi < 0.0:
+                lo, flo = hi, fhi
+            else:
+                flo *= 0.5
+            hi, fhi = x2, f2
+            if abs(hi - lo) <= 1e-13 * (1.0 + abs(hi)):
+                return hi
+            continue
+        if f1 == f0:
+            return np.nan
+        x2 = x1 - f1 * (x1 - x0) / (f1 - f0)
+        if abs(x2 - x1) > 0.2:  # a secant step that leaves the neighbourhood: a small one
+            x2 = x1 + math.copysign(0.2, x2 - x1)
+        x0, f0 = x1, f1
+        x1 = x2
+        f1 = _residual(x1, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+        if abs(x1 - x0) <= 1e-13 * (1.0 + abs(x1)):
+            return x1
+    return np.nan
+
+
+@numba.njit(cache=True)
 def _bem(U, vt, omega, r, chord, theta, dr, B, R, rh, pa, pcl, pcd, a, ap, rho, tol,
          max_iter):
     """Element-by-element BEM solution (module docstring); returns per element the normal and
-    tangential forces (N, over the element's width) and the inductions."""
+    tangential forces (N, over the element's width) and the inductions. Each element's flow
+    angle is the root of the one-equation residual (:func:`_solve_phi`) next to the previous
+    update's; where none is found, the inductions are iterated (relaxed) as before."""
     nb, n = U.shape
     fn = np.empty((nb, n))
     ft = np.empty((nb, n))
-    ac = 0.2
     for b in range(nb):
         for i in range(n):
             ri = r[i]
             sigma = B * chord[i] / (2.0 * math.pi * ri)
             u = max(U[b, i], 1e-3)
             ai, api = a[b, i], ap[b, i]
-            for _ in range(max_iter):
-                ux = u * (1.0 - ai)
-                ut = omega * ri * (1.0 + api) - vt[b, i]
-                phi = math.atan2(ux, ut)
-                al = (phi - theta[i] + math.pi) % (2.0 * math.pi) - math.pi
-                cl = np.interp(al, pa, pcl)
-                cd = np.interp(al, pa, pcd)
-                sp, cp = math.sin(phi), math.cos(phi)
-                cn = cl * cp + cd * sp
-                ct = cl * sp - cd * cp
-                s = max(abs(sp), 1e-6)
-                f_tip = B * (R - ri) / (2.0 * ri * s)
-                f_hub = B * (ri - rh) / (2.0 * max(rh, 1e-3) * s)
-                F = (4.0 / math.pi**2) * math.acos(math.exp(-f_tip)) \
-                    * math.acos(math.exp(-f_hub))
-                F = max(F, 1e-4)
-                scn = sigma * cn
-                K = 4.0 * F * sp * sp / (scn if abs(scn) > 1e-12 else 1e-12)
-                an = 1.0 / (K + 1.0)
-                if an > ac:  # Glauert correction, Spera's form (Hansen eq. 6.38)
-                    d = (K * (1.0 - 2.0 * ac) + 2.0) ** 2 + 4.0 * (K * ac * ac - 1.0)
-                    an = 0.5 * (2.0 + K * (1.0 - 2.0 * ac) - math.sqrt(max(d, 0.0)))
-                sct = sigma * ct
-                den = 4.0 * F * sp * cp / (sct if abs(sct) > 1e-12 else 1e-12)
-                apn = 1.0 / (den - 1.0) if abs(den - 1.0) > 1e-12 else 0.5
-                if not math.isfinite(an):
-                    an = 0.0
-                if not math.isfinite(apn):
-                    apn = 0.0
-                an = min(max(an, -0.5), 0.95)
-                apn = min(max(apn, -0.5), 0.5)
-                change = max(abs(an - ai), abs(apn - api))
-                ai += 0.5 * (an - ai)
-                api += 0.5 * (apn - api)
-                if change < tol:
-                    break
+            phi0 = math.atan2(u * (1.0 - ai), omega * ri * (1.0 + api) - vt[b, i])
+            phi = _solve_phi(phi0, u, omega * ri, vt[b, i], theta[i], sigma, B, R, ri, rh,
+                             pa, pcl, pcd)
+            if math.isfinite(phi):
+                ai, api = _inductions(phi, theta[i], sigma, B, R, ri, rh, pa, pcl, pcd)
+            else:
+                for _ in range(max_iter):
+                    ux = u * (1.0 - ai)
+                    ut = omega * ri * (1.0 + api) - vt[b, i]
+                    an, apn = _inductions(math.atan2(ux, ut), theta[i], sigma, B, R, ri, rh,
+                                          pa, pcl, pcd)
+                    change = max(abs(an - ai), abs(apn - api))
+                    ai += 0.5 * (an - ai)
+                    api += 0.5 * (apn - api)
+                    if change < tol:
+                        break
             a[b, i], ap[b, i] = ai, api
             ux = u * (1.0 - ai)
             ut = omega * ri * (1.0 + api) - vt[b, i]
