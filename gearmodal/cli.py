@@ -203,7 +203,7 @@ def cmd_simulate(args) -> int:
 
 
 STUDIES = ("double-contact", "gravity-torque", "mounting-azimuth", "clearance-map",
-           "load-sharing")
+           "load-sharing", "fatigue")
 
 
 def _study_module(name: str, folder: str | None):
@@ -236,10 +236,10 @@ def cmd_study(args) -> int:
     given = {"duration": args.duration, "seed": args.seed, "seeds": args.seeds,
              "step_deg": args.step, "max_workers": args.workers,
              "gravity": False if args.no_gravity else None,
-             "top_frequency_hz": args.top_frequency}
+             "top_frequency_hz": args.top_frequency, "quick": True if args.quick else None}
     flags = {"duration": "--duration", "seed": "--seed", "seeds": "--seeds", "step_deg": "--step",
              "max_workers": "--workers", "gravity": "--no-gravity",
-             "top_frequency_hz": "--top-frequency"}
+             "top_frequency_hz": "--top-frequency", "quick": "--quick"}
     kwargs = {"progress": not args.quiet}
     for key, value in given.items():
         if value is None:
@@ -326,6 +326,8 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--no-gravity", action="store_true", dest="no_gravity",
                     help="leave out the gearbox bodies' weight (double-contact, "
                          "mounting-azimuth; default: on)")
+    st.add_argument("--quick", action="store_true", help="a short version: fewer bins, "
+                    "seeds and seconds (fatigue)")
     st.add_argument("--top-frequency", type=float, dest="top_frequency", metavar="HZ",
                     help="mass-scaling rung: the gearbox's modes above HZ slowed to it "
                          "(turbine studies; default: the full model; 500: 2.6-3.5x faster, "

@@ -137,3 +137,91 @@ def rating_life(load: pd.Series, speed_rpm, C: float, p: float = WOEHLER["bearin
     n_mean = total * 60.0 / float(t[-1] - t[0])
     return {"equivalent_load_N": p_eq, "l10_million_revolutions": l10,
             "l10_h": l10 * 1e6 / (60.0 * n_mean)}
+
+
+#: load levels of the lifetime LDD/LRD tables of :func:`drivetrain_fatigue` (N m, N, N):
+#: fixed edges, so that runs add up bin by bin
+LEVELS = {"rotor_torque_Nm": np.linspace(-2e5, 6e5, 81),
+          "tooth_force_N": np.linspace(0.0, 4e5, 81),
+          "planet_bearing_force_N": np.linspace(0.0, 6e5, 81)}
+
+
+def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: float = 5.0,
+                       woehler: dict | None = None, n_ref: float = N_REF,
+                       tables: bool = True) -> dict:
+    """Fatigue quantities of one turbine run (a :class:`gearmodal.turbine.DrivetrainResult`)
+    after its first ``t_skip`` s (the start's transient): one row for a design-load-case
+    table (``gearmodal study fatigue``).
+
+    - ``del_tooth_N``: the largest tooth-root DEL (F1, ``woehler["tooth_root"]``) of the
+      first planetary stage's flank forces (sun-planet and ring-planet, front and back, every
+      planet); ``del_tooth_flank_N`` likewise with the flank exponent;
+    - ``del_planet_bearing_N``: the largest DEL of a planet bearing's radial force (bearing
+      exponent);
+    - ``l10_planet_bearing_h``: the shortest ISO 281 life (F3) of a planet bearing of dynamic
+      rating ``bearing_C`` (N), its revolutions those of the planet on its pin
+      (``planet_spin`` per rotor revolution: ``z_ring / z_planet`` for a carrier input);
+      ``planet_bearing_revolutions`` and ``planet_bearing_peq_N`` of that bearing (what a
+      lifetime sum needs);
+    - ``del_rotor_torque_Nm`` (exponent of the tooth root), ``mean_power_W``,
+      ``max_front_force_N``, ``p99_tooth_force_N`` and ``p99_planet_bearing_force_N`` (99th
+      percentiles over the output times), ``duration_s`` (the time counted).
+
+    With ``tables`` the dict holds ``"tables"``: ``spectra``, the LDD (time) and LRD (rotor
+    revolutions) of the rotor torque, the largest tooth force and the largest planet-bearing
+    force at the fixed levels :data:`LEVELS`.
+    """
+    ex = {**WOEHLER, **(woehler or {})}
+    sim, tur = result.gearbox, result.turbine.loads
+    if not (isinstance(t_skip, (int, float)) and 0 <= t_skip < float(sim.forces.index[-1])):
+        raise ModelError("t_skip", f"= {t_skip!r}: must be >= 0 and shorter than the run")
+    f = sim.forces[sim.forces.index >= t_skip]
+    stage = sim.meshes()
+    flanks = [f"{m}.{side}" for m in stage if m.startswith(stage[0].split(".")[0] + ".")
+              for side in ("front", "back") if f"{m}.{side}" in f.columns]
+    bearings = [b for b in sim.elements_of("planet_bearing")
+                if f"{b}.x" in f.columns and f"{b}.y" in f.columns]
+    if not flanks or not bearings:
+        raise ModelError("result", "needs a planetary stage's flank and planet-bearing forces")
+    speed = tur["rotor_speed_rpm"].reindex(f.index, method="nearest").to_numpy()
+    torque = tur["torque_Nm"].reindex(f.index, method="nearest")
+    teeth = f[flanks].max(axis=1)
+    radial = {b: np.hypot(f[f"{b}.x"], f[f"{b}.y"]) for b in bearings}
+    worst = max(radial, key=lambda b: float(np.mean(radial[b] ** ex["bearing"])))
+    if not (isinstance(planet_spin, (int, float)) and planet_spin > 0
+            and math.isfinite(planet_spin)):
+        raise ModelError("planet_spin", f"= {planet_spin!r}: planet revolutions on the pin "
+                         "per rotor revolution, > 0")
+    ratio = float(planet_spin)
+    life = {b: rating_life(radial[b], ratio * speed, bearing_C, ex["bearing"]) for b in bearings}
+    short = min(life, key=lambda b: life[b]["l10_h"])
+    t = np.asarray(f.index, dtype=float)
+    revs = float(np.sum(_weights(t) * ratio * np.abs(speed) / 60.0))
+    row = {"duration_s": float(t[-1] - t[0]),
+           "del_tooth_N": max(damage_equivalent_load(f[c], ex["tooth_root"], n_ref)
+                              for c in flanks),
+           "del_tooth_flank_N": max(damage_equivalent_load(f[c], ex["tooth_flank"], n_ref)
+                                    for c in flanks),
+           "del_planet_bearing_N": max(damage_equivalent_load(r, ex["bearing"], n_ref)
+                                       for r in radial.values()),
+           "l10_planet_bearing_h": life[short]["l10_h"],
+           "planet_bearing_peq_N": life[short]["equivalent_load_N"],
+           "planet_bearing_revolutions": revs,
+           "del_rotor_torque_Nm": damage_equivalent_load(torque, ex["tooth_root"], n_ref),
+           "max_front_force_N": float(teeth.max()),
+           "p99_tooth_force_N": float(np.percentile(teeth, 99.0)),
+           "p99_planet_bearing_force_N": float(np.percentile(radial[worst], 99.0)),
+           "mean_power_W": float(tur["power_W"][tur.index >= t_skip].mean())}
+    if tables:
+        rotor_rpm = pd.Series(speed, index=f.index)
+        parts = []
+        for name, series in (("rotor_torque_Nm", torque), ("tooth_force_N", teeth),
+                             ("planet_bearing_force_N", radial[worst])):
+            edges = LEVELS[name]
+            x = pd.Series(np.clip(series.to_numpy(), edges[0], edges[-1]), index=f.index)
+            ldd = load_duration(x, edges)
+            lrd = load_revolutions(x, rotor_rpm, edges)
+            parts.append(ldd.assign(quantity=name, revolutions=lrd["revolutions"]))
+        row["tables"] = {"spectra": pd.concat(parts, ignore_index=True)}
+    return row
+

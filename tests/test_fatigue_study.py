@@ -1,0 +1,106 @@
+"""The design-load-case set (studies/fatigue.py, ``gearmodal study fatigue``): the IEC
+normal turbulence model (D1), the Rayleigh hours (D2), the lifetime sums (D3) against closed
+forms, and a shortened set through the CLI."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import gearmodal as gm
+from gearmodal.cli import _study_module, main
+from gearmodal.fatigue import WOEHLER, drivetrain_fatigue
+from gearmodal.turbine import simulate_drivetrain
+
+fatigue = _study_module("fatigue", None)
+
+
+def test_ntm_turbulence_intensity_and_rayleigh_hours():
+    """(D1): IEC 61400-1's sigma_1 = I_ref (0.75 V + 5.6): 18.0 % at 15 m/s in category A
+    (the standard's tabulated value), 14 % x (0.75 + 5.6 / V) in B. (D2): bins from 0 to far
+    beyond cut-out hold the whole design life; the class II mean speed 8.5 m/s."""
+    assert fatigue.turbulence_intensity(15.0, "A") == pytest.approx(0.16 * 16.85 / 15.0)
+    assert fatigue.turbulence_intensity(15.0, "A") == pytest.approx(0.1797, abs=5e-5)
+    v = np.arange(1.0, 101.0, 2.0)  # bins [0, 2], [2, 4], ... [98, 100]
+    h = fatigue.bin_hours(v, "II")
+    assert h.sum() == pytest.approx(20 * 8766.0, rel=1e-12)
+    # the mean of the Rayleigh distribution (bin centres: within a bin width squared / 12)
+    assert np.sum(h * v) / h.sum() == pytest.approx(8.5, abs=0.05)
+
+
+def test_lifetime_sums_against_a_hand_calculation():
+    """(D3) on two bins with two seeds each, made-up runs: the lifetime DEL is the m-th root
+    of the damage per second of each run, averaged over its bin's seeds, times the bin's
+    seconds; L10h from the revolution-weighted P_eq; spectra summed with the same weights."""
+    runs = pd.DataFrame({
+        "variant": ["a"] * 4, "wind_speed_mps": [6.0, 6.0, 12.0, 12.0], "seed": [1, 2, 1, 2],
+        "duration_s": [100.0, 100.0, 50.0, 50.0],
+        "del_tooth_N": [1e3, 2e3, 3e3, 5e3], "del_planet_bearing_N": [10.0, 20.0, 30.0, 40.0],
+        "del_rotor_torque_Nm": [1.0, 1.0, 1.0, 1.0],
+        "planet_bearing_revolutions": [100.0, 120.0, 60.0, 80.0],
+        "planet_bearing_peq_N": [1e5, 1.2e5, 2e5, 3e5]})
+    spec = pd.DataFrame({"quantity": ["x"], "level_low": [0.0], "level_high": [1.0],
+                         "time_s": [10.0], "revolutions": [3.0]})
+    life, s = fatigue.lifetime(runs, {i: spec for i in range(4)}, "II")
+    h6, h12 = fatigue.bin_hours([6.0, 12.0], "II")
+    w = np.array([h6 / 2 / 100, h6 / 2 / 100, h12 / 2 / 50, h12 / 2 / 50]) * 3600
+    m = WOEHLER["tooth_root"]
+    expect = np.sum(w * runs.del_tooth_N.to_numpy() ** m) ** (1 / m)
+    assert life.loc["a", "del_tooth_N"] == pytest.approx(expect, rel=1e-12)
+    p = WOEHLER["bearing"]
+    n = runs.planet_bearing_revolutions.to_numpy()
+    peq = (np.sum(w * n * runs.planet_bearing_peq_N.to_numpy() ** p) / np.sum(w * n)) ** (1 / p)
+    assert life.loc["a", "planet_bearing_peq_N"] == pytest.approx(peq, rel=1e-12)
+    l10h = (fatigue.BEARING_C / peq) ** p * 1e6 / (np.sum(w * n) / (h6 + h12))
+    assert life.loc["a", "l10_planet_bearing_h"] == pytest.approx(l10h, rel=1e-12)
+    assert s.hours.iloc[0] == pytest.approx(np.sum(w) * 10.0 / 3600.0, rel=1e-12)
+    assert s.revolutions.iloc[0] == pytest.approx(np.sum(w) * 3.0, rel=1e-12)
+
+
+def test_run_fatigue_of_a_constant_load_state():
+    """A steady run (no turbulence, on the grid): the rotor torque's LRD puts all the rotor's
+    revolutions (speed x time / 60) in the bins it visits, the 99th percentile lies below the
+    peak, and L10 follows ISO 281 from the bearing's P_eq and revolutions."""
+    tb = gm.turbine.load_turbine("studies/turbines/600kw_turbine.toml")
+    gb = gm.load("studies/models/600kw.toml")
+    res = simulate_drivetrain(tb, gm.turbine.Wind(mean_speed=11.0), gb, 1.5,
+                              rotor_speed0_rpm=22.1, connected=True, top_frequency_hz=500.0)
+    row = drivetrain_fatigue(res, bearing_C=2e6, planet_spin=99 / 39, t_skip=0.5)
+    sp = row["tables"]["spectra"]
+    tq = sp[sp.quantity == "rotor_torque_Nm"]
+    speed = res.turbine.loads.rotor_speed_rpm[res.turbine.loads.index >= 0.5].mean()
+    assert tq.revolutions.sum() == pytest.approx(speed * row["duration_s"] / 60, rel=5e-3)
+    assert tq.time_s.sum() == pytest.approx(row["duration_s"], rel=1e-12)
+    assert row["p99_tooth_force_N"] <= row["max_front_force_N"]
+    l10h = (2e6 / row["planet_bearing_peq_N"]) ** (10 / 3) * 1e6 / (
+        row["planet_bearing_revolutions"] / row["duration_s"] * 3600)
+    assert row["l10_planet_bearing_h"] == pytest.approx(l10h, rel=1e-9)
+    with pytest.raises(gm.ModelError, match="planet_spin"):
+        drivetrain_fatigue(res, bearing_C=2e6, planet_spin=0.0, t_skip=0.5)
+    with pytest.raises(gm.ModelError, match="t_skip"):
+        drivetrain_fatigue(res, bearing_C=2e6, planet_spin=2.5, t_skip=10.0)
+
+
+def test_study_fatigue_shortened(tmp_path):
+    """The quick set shortened to 16 s runs: both gearboxes on the same seeds, the columns
+    the issue names, a lifetime table with the clearance/reference ratio, a report; the
+    clearance gearbox's tooth DEL above the reference's (double contact), the rotor torque's
+    the same to 2 % (the gearboxes differ inside, not in the aerodynamics)."""
+    out = tmp_path / "fat"
+    assert main(["study", "fatigue", "--quick", "--duration", "16", "--out", str(out),
+                 "--quiet"]) == 0
+    s = pd.read_csv(out / "summary.csv")
+    for col in ("variant", "wind_speed_mps", "seed", "del_tooth_N", "del_planet_bearing_N",
+                "l10_planet_bearing_h"):
+        assert col in s and s[col].notna().all()
+    assert sorted(set(zip(s.variant, s.wind_speed_mps, s.seed, strict=True))) == sorted(
+        (v, w, 1) for v in ("reference", "clearance") for w in (6.0, 12.0, 18.0))
+    life = pd.read_csv(out / "lifetime.csv", index_col="variant")
+    assert list(life.index) == ["reference", "clearance", "clearance / reference"]
+    assert life.loc["clearance", "del_tooth_N"] > life.loc["reference", "del_tooth_N"]
+    assert life.loc["clearance / reference", "del_rotor_torque_Nm"] == pytest.approx(1, abs=0.02)
+    assert (out / "report.html").exists() and (out / "fatigue.png").stat().st_size > 10_000
+    assert math.isfinite(life.loc["reference", "l10_planet_bearing_h"])
