@@ -36,7 +36,7 @@ def _union_length(intervals: Iterable[tuple[float, float]]) -> float:
 
 
 def summarize(result, *, planet: str = "planet1", tables: bool = False,
-              loaded_fraction: float = 0.1) -> dict:
+              loaded_fraction: float = 0.1, fatigue: dict | None = None) -> dict:
     """The quantities of the paper's double-contact study for one simulation.
 
     ``result`` is a :class:`~gearmodal.SimulationResult` or a turbine run's
@@ -60,6 +60,11 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
       planet's mean mesh load over the mean);
     - ``n_events``; for a turbine run also ``cut_in_time_s`` and ``mean_power_W`` (after
       cut-in).
+
+    With ``fatigue`` (keyword arguments of :func:`gearmodal.fatigue.drivetrain_fatigue`: a
+    turbine run's ``bearing_C``, ``planet_spin``, ``t_skip``) the dict also holds that
+    function's DELs, 99th percentiles and bearing life (where a name is taken above, this
+    function's value stays).
 
     With ``tables=True`` the dict also holds ``"tables"``: ``events`` (the event log) and
     ``forces`` (planet flank and bearing forces and the load-sharing factor against time), as
@@ -116,6 +121,11 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
         ld = result.turbine.loads
         out["mean_power_W"] = float(ld.loc[ld.index >= cut, "power_W"].mean()) \
             if cut is not None else math.nan
+    if fatigue is not None:
+        from .fatigue import drivetrain_fatigue
+
+        for key, val in drivetrain_fatigue(result, tables=False, **fatigue).items():
+            out.setdefault(key, val)
     if tables:
         cols = [f"{m}.{side}" for k in ("sun", "ring") for m in meshes[k]
                 for side in ("front", "back")]

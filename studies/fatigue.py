@@ -50,7 +50,7 @@ import pandas as pd
 import gearmodal as gm
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from double_contact import CLEARANCE, SCENE  # noqa: E402
+from double_contact import BEARING_C, CLEARANCE, SCENE, planet_spin  # noqa: E402
 
 from gearmodal.fatigue import WOEHLER, drivetrain_fatigue  # noqa: E402
 from gearmodal.report import write_study_report  # noqa: E402
@@ -67,9 +67,6 @@ I_REF = {"A": 0.16, "B": 0.14, "C": 0.12}
 YEARS, HOURS = 20.0, 8766.0
 #: start's transient not counted, s
 T_SKIP = 5.0
-#: dynamic load rating of a planet's bearing set (N): two cylindrical roller bearings of
-#: ~1.2 MN each as a pair, 2^(7/9) x 1.2 MN (ISO 281; estimate for the GRC planet bearings)
-BEARING_C = 2.06e6
 #: rotor speed of the connected start (rpm): synchronous 1800 rpm / 81.49
 SPEED0_RPM = 22.1
 VARIANTS = {"reference": {}, "clearance": {"model.stages.0.carrier_bearing": CLEARANCE}}
@@ -191,7 +188,7 @@ def run(out, *, quick: bool = False, seed: int = 1, seeds: int | None = None,
     if not duration > T_SKIP + 10.0:
         raise gm.ModelError("duration", f"= {duration!r}: must exceed {T_SKIP + 10:g} s (the "
                             f"first {T_SKIP:g} s are a transient)")
-    spin = _planet_spin()
+    spin = planet_spin()
     table = cases(speeds, [seed + k for k in range(n_seeds)], duration, top_frequency_hz,
                   turbulence_category)
     metrics = functools.partial(drivetrain_fatigue, bearing_C=BEARING_C, planet_spin=spin,
@@ -225,17 +222,6 @@ def run(out, *, quick: bool = False, seed: int = 1, seeds: int | None = None,
         ("h2", "Lifetime"), life, ("h2", "Runs"), runs.drop(columns="cpu_s"),
         ("fatigue.png", fig)])
     return life
-
-
-def _planet_spin() -> float:
-    """Planet revolutions on its pin per rotor (carrier) revolution: z_ring / z_planet of the
-    scene's first stage."""
-    from gearmodal.scene import load_scene
-
-    model = load_scene(SCENE).model
-    ring = next(b for b in model.bodies.values() if b.role == "ring")
-    planet = next(b for b in model.bodies.values() if b.role == "planet")
-    return ring.teeth / planet.teeth
 
 
 if __name__ == "__main__":
