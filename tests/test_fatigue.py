@@ -63,3 +63,18 @@ def test_damage_equivalent_loads_of_a_run_and_bad_input():
     with pytest.raises(gm.ModelError, match="C"):
         fatigue.rating_life(pd.Series([1.0, 2.0], index=[0.0, 1.0]), 10.0, -1.0)
     assert np.isfinite(d.del_N).all() and (d.del_N >= 0).all()
+
+
+def test_counting_on_the_turning_points_gives_the_same_cycles():
+    """The count reads only the series' turning points (fatigue._reversals): on random walks
+    with plateaus it gives exactly the cycles of the rainflow package on every sample."""
+    import rainflow
+
+    from gearmodal.fatigue import rainflow_cycles
+
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        x = np.round(rng.standard_normal(rng.integers(3, 400)).cumsum(), 1)
+        full = [(r, m, c) for r, m, c, _, _ in rainflow.extract_cycles(x)]
+        np.testing.assert_allclose(rainflow_cycles(x).to_numpy(), np.array(full), rtol=0,
+                                   atol=0)
