@@ -21,6 +21,7 @@ shorter than ``0.5 / rho(A_s)``).
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 import scipy.linalg as sla
@@ -33,6 +34,10 @@ RPM = 2.0 * math.pi / 60.0
 TAYLOR_REACH = 0.5
 #: number of Taylor terms kept (error ~ TAYLOR_REACH^n / n!, far below machine precision)
 TAYLOR_TERMS = 28
+
+
+#: per geometry (weakly): the mass factors and turning data its systems share
+_SHARED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 class PiecewiseLinearSystem:
@@ -67,14 +72,22 @@ class PiecewiseLinearSystem:
         self.n = n
         om = float(speed_rpm) * RPM
         self.speed_rpm = float(speed_rpm)
-        try:
-            L = np.linalg.cholesky(asm.M)
-        except np.linalg.LinAlgError:
-            raise ModelError("mass", "the mass matrix is not positive definite") from None
-        # M = L L^T, M^-1 = Linv^T Linv (numpy's inverse of the small triangular factor: the
-        # scipy wrappers' checks cost more than the solves at these sizes)
-        self.Linv = np.linalg.inv(L)
-        self.Minv = self.Linv.T @ self.Linv
+        # the factors and the turning data depend on the mass and the geometry only: a system
+        # re-based to another speed on the same assembly and geometry (the turbine run) reuses
+        # them (_SHARED, keyed by the geometry and holding the mass array it was made from)
+        shared = _SHARED.get(geometry) if geometry is not None else None
+        if shared is not None and shared["M"] is asm.M:
+            self.Linv, self.Minv = shared["Linv"], shared["Minv"]
+        else:
+            try:
+                L = np.linalg.cholesky(asm.M)
+            except np.linalg.LinAlgError:
+                raise ModelError("mass", "the mass matrix is not positive definite") from None
+            # M = L L^T, M^-1 = Linv^T Linv (numpy's inverse of the small triangular factor:
+            # the scipy wrappers' checks cost more than the solves at these sizes)
+            self.Linv = np.linalg.inv(L)
+            self.Minv = self.Linv.T @ self.Linv
+            shared = None
         self.geometry = None
         self.periodic = None
         self.GT = np.zeros((1, 0, 0), dtype=complex)  # turning load harmonics (use_loads)
@@ -83,7 +96,11 @@ class PiecewiseLinearSystem:
         if geometry is not None:
             from .periodic import periodic_data
 
-            const, self.periodic = periodic_data(geometry, self.Minv)
+            if shared is None:
+                shared = {"M": asm.M, "Linv": self.Linv, "Minv": self.Minv,
+                          "periodic": periodic_data(geometry, self.Minv)}
+                _SHARED[geometry] = shared
+            const, self.periodic = shared["periodic"]
             if self.periodic is not None:
                 self.geometry = geometry
                 K, C = const["K"], const["C"]
