@@ -50,11 +50,13 @@ FIGURES: tuple[Figure, ...] = (
            "tooth_forces_clearance.png", ("--duration", "1")),
     Figure("gravity_torque.png", ("study", "gravity-torque"), "planet_forces.png",
            ("--step", "30")),
-    Figure("mounting_azimuth.png", ("study", "mounting-azimuth", "--seeds", "3"),
+    Figure("mounting_azimuth.png", ("study", "mounting-azimuth", "--seeds", "5"),
            "mounting_azimuth.png", ("--duration", "1", "--step", "60", "--seeds", "1")),
     Figure("clearance_map.png", ("study", "clearance-map"), "clearance_map.png",
            ("--duration", "0.02")),
     Figure("load_sharing.png", ("study", "load-sharing"), "k_gamma.png", ("--step", "120")),
+    Figure("fatigue_quick.png", ("study", "fatigue", "--quick"), "fatigue.png",
+           ("--duration", "16")),
 )
 
 #: the mode-shape drawings: (file name, model, mode index at rated speed, animated too); the
