@@ -155,3 +155,26 @@ def test_mode_shape_cycle_and_animation(tmp_path):
         assert gif.format == "GIF" and gif.n_frames == 8
     with pytest.raises(gm.ModelError, match="frames"):
         res.animate_shape(i, tmp_path / "x.gif", frames=1)
+
+
+def test_a_model_changed_in_place_gives_fresh_modes():
+    """gm.modal reuses a model's assembly (assembly.cached_assembly) only while the model is
+    unchanged: a bearing stiffness changed inside its table, a body's inertia, a removed
+    bearing each give exactly the modes of a fresh copy, and the cached arrays are
+    read-only."""
+    from gearmodal.assembly import cached_assembly
+
+    m = gm.load("studies/models/600kw.toml")
+    first = modal(m, speed_rpm=22.1).frequencies_hz.copy()
+    assert not cached_assembly(m).M.flags.writeable
+    bearing = next(b for b in m.bearings.values() if b.role == "carrier_bearing")
+    bearing.stiffness["x"] *= 0.5
+    changed = modal(m, speed_rpm=22.1).frequencies_hz
+    assert not np.allclose(changed, first)
+    np.testing.assert_array_equal(changed, modal(m.copy(), speed_rpm=22.1).frequencies_hz)
+    m.bodies["generator"].inertia *= 2.0
+    np.testing.assert_array_equal(modal(m, speed_rpm=22.1).frequencies_hz,
+                                  modal(m.copy(), speed_rpm=22.1).frequencies_hz)
+    del m.bearings[bearing.name]
+    np.testing.assert_array_equal(modal(m, speed_rpm=22.1).frequencies_hz,
+                                  modal(m.copy(), speed_rpm=22.1).frequencies_hz)
