@@ -330,8 +330,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "seeds and seconds (fatigue)")
     st.add_argument("--top-frequency", type=float, dest="top_frequency", metavar="HZ",
                     help="mass-scaling rung: the gearbox's modes above HZ slowed to it "
-                         "(turbine studies; default: the full model; 500: 2.6-3.5x faster, "
-                         "peaks within 1.5 %%, benchmarks/RESULTS.md)")
+                         "(turbine studies; default: the full model; 500: about 3x faster, its "
+                         "error in docs/guide/fidelity.md)")
     st.add_argument("--workers", type=int, help="parallel processes (default: CPU count)")
     st.add_argument("--studies", help="folder of the study scripts (default: the source "
                     "tree's studies/)")

@@ -116,7 +116,7 @@ TURBINE = Table("turbine", (
           doc="the weight of every gearbox body, along the turbine file's tilt_deg"),
     Field("top_frequency_hz", "number", "Hz", low=1.0, high=1e5,
           doc="mass-scaling rung: gearbox modes above it slowed to it (default: none, "
-              "the full model; 500 Hz: 2.6-3.5x faster, peaks within 1.5 %)")),
+              "the full model; 500 Hz: about 3x faster, its error in the fidelity guide)")),
     "The turbine in wind, simulated with the gearbox of scene.model.")
 #: the scene file's tables
 TABLES = ("scene", "loads", "q0", "v0", "options", "load_file", "turbine", "wind")
