@@ -21,12 +21,15 @@ from scipy import stats
 
 from .errors import ModelError
 
+#: seeds_needed beyond this is reported as NaN (an effect too small to decide)
+MAX_SEEDS = 100_000
+
 
 def paired_ratio(a, b, level: float = 0.95) -> dict:
     """(C1), (C2) for the values ``a`` and ``b`` of two variants on the same seeds (same
     order): ``ratio``, ``low``, ``high`` (NaN with one seed), ``n``, ``differs`` (the
     interval excludes 1), ``seeds_needed`` (C2; NaN when the mean log ratio is 0 or there
-    is one seed). Values must be > 0 (a ratio of loads)."""
+    is one seed, or above ``MAX_SEEDS``). Values must be > 0 (a ratio of loads)."""
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     if a.shape != b.shape or a.ndim != 1 or a.size < 1:
         raise ModelError("paired_ratio", "needs two equal-length 1-D sequences (same seeds)")
@@ -46,9 +49,13 @@ def paired_ratio(a, b, level: float = 0.95) -> dict:
     half = float(stats.t.ppf(0.5 + level / 2, n - 1)) * sd / math.sqrt(n)
     need = math.nan
     if mean != 0.0:
-        for k in range(2, 10_001):
+        # t_(k-1) > z, so no k below (z sd / mean)^2 decides: search up from there
+        z = float(stats.norm.ppf(0.5 + level / 2))
+        k = max(2, int((z * sd / abs(mean)) ** 2))
+        while k <= MAX_SEEDS:
             if float(stats.t.ppf(0.5 + level / 2, k - 1)) * sd / math.sqrt(k) < abs(mean):
                 need = k
                 break
+            k += 1
     return {"ratio": math.exp(mean), "low": math.exp(mean - half), "high": math.exp(mean + half),
             "n": n, "differs": bool(mean - half > 0 or mean + half < 0), "seeds_needed": need}
