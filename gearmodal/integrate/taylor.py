@@ -58,6 +58,10 @@ REFRESH = 64
 #: a piece at the full reach whose fastest mode dominates the rows is halved once (review
 #: finding; costs time only, 3 of 563 pieces on the planetary stage)
 TAIL = 1e-15
+#: a term of a turning harmonic's exponential series ``E_h`` (modulus 1 at its start) below
+#: this ends it in the Cauchy products (H2): what is left is below 1e-20 of the piece's
+#: largest coefficient, far under the series' own truncation (``TAIL``)
+E_TINY = 2.0**-70
 #: resolution of the per-piece term count (fractions of the reach)
 TERM_BINS = 64
 #: numba fast-math flags of the small dense loops: reassociation (vectorised sums and maxima)
@@ -119,9 +123,12 @@ def _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc):
 
 @numba.njit(cache=True, fastmath=True, inline="always")
 def _term(MKC, B, y, k, c2, c1):
-    """``B[k + 2] = [M^-1 K_s, M^-1 C_s] [c2 B[k]; c1 B[k + 1]]``, the frozen part of (T1)."""
+    """``B[k + 2] = [M^-1 K_s, M^-1 C_s, Z] [c2 B[k]; c1 B[k + 1]; y_Z]``: the frozen part of
+    (T1), plus the turning rows of (T2) when ``MKC`` has the columns ``Z`` of the turning
+    harmonics (``y[2 n:]`` set by the caller)."""
     n = B.shape[1]
     n2 = n - n % 2
+    w = MKC.shape[1]  # 2 n, or more with the turning columns (their y filled by the caller)
     for j in range(n):
         y[j] = B[k, j] * c2
         y[n + j] = B[k + 1, j] * c1
@@ -129,7 +136,7 @@ def _term(MKC, B, y, k, c2, c1):
     for i in range(0, n2, 2):
         a0 = 0.0
         a1 = 0.0
-        for j in range(2 * n):
+        for j in range(w):
             yj = y[j]
             a0 += MKC[i, j] * yj
             a1 += MKC[i + 1, j] * yj
@@ -137,7 +144,7 @@ def _term(MKC, B, y, k, c2, c1):
         B[k + 2, i + 1] = a1
     for i in range(n2, n):
         a = 0.0
-        for j in range(2 * n):
+        for j in range(w):
             a += MKC[i, j] * y[j]
         B[k + 2, i] = a
 
@@ -172,8 +179,8 @@ def _coefficients(MKC, g0, g1, q, v, h, B, y):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, urows, ZK, ZC, Y, Yd,
-                          Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads):
+def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC, Y,
+                          Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads):
     """:func:`_coefficients` of the time-varying system (T2): the frozen part as (T1), plus
     the turning harmonics of :mod:`gearmodal.integrate.periodic` by Cauchy products with the
     piece's exponential series ``E`` (H1, n_terms) ((P2), ``E[0]`` the constant 1):
@@ -217,7 +224,7 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, urows, ZK
             for c in range(nT):
                 Y[0, hh, k, c] = 0.0
                 Y[1, hh, k, c] = 0.0
-            for j in range(k + 1):
+            for j in range(min(k + 1, EL[hh])):
                 er = E[hh, j].real
                 ei = E[hh, j].imag
                 for c in range(nT):
@@ -228,7 +235,7 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, urows, ZK
                 for c in range(nT):
                     Yd[0, hh, k, c] = 0.0
                     Yd[1, hh, k, c] = 0.0
-                for j in range(k + 1):
+                for j in range(min(k + 1, EL[hh])):
                     f = k - j + 1.0
                     er = E[hh, j].real * f
                     ei = E[hh, j].imag * f
@@ -251,30 +258,35 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, tcols, krows, urows, ZK
         if k + 2 >= n_terms:
             continue
         den = 1.0 / ((k + 1.0) * (k + 2.0))
-        _frozen_term(MKC, B, y, k, h, den, g0, g1)
+        # the turning rows' inputs, laid out as the columns Z of MKC (see taylor_run):
+        # [Re Y_h, Im Y_h] per harmonic h >= 1, then [Re Yd_h, Im Yd_h] with a turning damping
+        ck = -h2 * den
+        cd = -h * den
+        o = 2 * n
         for hh in range(1, H1):
-            ek = E[hh, k] * h2 * den
-            ek1 = E[hh, k - 1] * (h2 * h * den) if k > 0 else 0j
-            if loads:
+            for c in range(nT):
+                y[o + c] = ck * Y[0, hh, k, c]
+                y[o + nT + c] = ck * Y[1, hh, k, c]
+            o += 2 * nT
+        if cturn:
+            for hh in range(1, H1):
+                for c in range(nT):
+                    y[o + c] = cd * Yd[0, hh, k, c]
+                    y[o + nT + c] = cd * Yd[1, hh, k, c]
+                o += 2 * nT
+        _frozen_term(MKC, B, y, k, h, den, g0, g1)
+        if loads:
+            for hh in range(1, H1):
+                ek = E[hh, k] * h2 * den
+                ek1 = E[hh, k - 1] * (h2 * h * den) if k > 0 else 0j
                 for i in range(n):
                     B[k + 2, i] += (ek * GV[hh, i] + ek1 * GVS[hh, i]).real
-            for i in krows:
-                acc = 0.0
-                for c in range(nT):
-                    z = ZK[hh, i, c]
-                    acc -= z.real * Y[0, hh, k, c] - z.imag * Y[1, hh, k, c]
-                acc *= h2 * den
-                if cturn:
-                    for c in range(nT):
-                        z = ZC[hh, i, c]
-                        acc -= (h * den) * (z.real * Yd[0, hh, k, c] - z.imag * Yd[1, hh, k, c])
-                B[k + 2, i] += acc
         for e in range(nTC):
             if not closed[e]:
                 continue
             for hh in range(H1):
                 fe = 0j
-                for j in range(k + 1):
+                for j in range(min(k + 1, EL[hh])):
                     fe += E[hh, j] * FT[e, k - j]
                 fe *= h2 * den
                 for i in urows:
@@ -571,7 +583,32 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     N = x.shape[0]
     n = N // 2
     nc = W.shape[0]
-    MKC = np.empty((n, 2 * n))
+    # [M^-1 K_s, M^-1 C_s] and, for a turning system, the columns Z of the turning harmonics'
+    # rows (T2): Re/Im of ZK_h (h >= 1) on Re/Im of Y_h, then of ZC_h on Yd_h; one product
+    H1 = harm.shape[0]
+    nT = tcols.shape[0]
+    cturn = False  # a turning damping (constant over the run)
+    for hh in range(1, H1):
+        for i in krows:
+            for c in range(nT):
+                if ZC[hh, i, c] != 0.0:
+                    cturn = True
+    nz = 2 * nT * (H1 - 1) * (2 if cturn else 1) if H1 > 1 else 0
+    MKC = np.zeros((n, 2 * n + nz))
+    o = 2 * n
+    for hh in range(1, H1):
+        for i in krows:
+            for c in range(nT):
+                MKC[i, o + c] = ZK[hh, i, c].real
+                MKC[i, o + nT + c] = -ZK[hh, i, c].imag
+        o += 2 * nT
+    if cturn:
+        for hh in range(1, H1):
+            for i in krows:
+                for c in range(nT):
+                    MKC[i, o + c] = ZC[hh, i, c].real
+                    MKC[i, o + nT + c] = -ZC[hh, i, c].imag
+            o += 2 * nT
     acc = np.empty(n)
     n_terms = terms[terms.shape[0] - 1]
     B = np.empty((n_terms, n))
@@ -586,7 +623,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     coef = np.empty(n_terms)
     work_flat = np.empty((DEPTH + 5) * n_terms)
     stk = np.empty((2, DEPTH + 1))
-    ysc = np.empty(2 * n)
+    ysc = np.empty(2 * n + nz)
     roots = np.empty(nc)
     order = np.empty(nc, dtype=np.int64)
     order_est = np.empty(nc)
@@ -595,11 +632,10 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     g0 = np.empty(n)
     m = F.shape[1]
     # turning geometry (empty for a frozen system)
-    H1 = harm.shape[0]
-    nT = tcols.shape[0]
     nTC = tc_idx.shape[0]
     turning = H1 > 1
     E = np.zeros((H1, n_terms), dtype=np.complex128)
+    EL = np.full(H1, n_terms, dtype=np.int64)  # terms of E_h up to the first negligible one
     Y = np.empty((2, H1, n_terms, nT))
     Yd = np.empty((2, H1, n_terms, nT))
     Bt = np.empty((n_terms, nT))
@@ -610,12 +646,6 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     kt = np.empty(nTC)
     ct = np.empty(nTC)
     closed = np.empty(nTC, dtype=np.bool_)
-    cturn = False  # a turning damping (constant over the run)
-    for hh in range(1, H1):
-        for i in krows:
-            for c in range(nT):
-                if ZC[hh, i, c] != 0.0:
-                    cturn = True
     loads = False  # a turning load over the current output step
     VA = np.zeros((H1, n), dtype=np.complex128)
     VS = np.zeros((H1, n), dtype=np.complex128)
@@ -715,8 +745,16 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     for hh in range(H1):
                         z = 1j * harm[hh] * om * h
                         E[hh, 0] = complex(math.cos(harm[hh] * psi), math.sin(harm[hh] * psi))
+                        EL[hh] = nt
                         for jj in range(1, nt):
+                            if EL[hh] < nt:
+                                E[hh, jj] = 0j
+                                continue
                             E[hh, jj] = E[hh, jj - 1] * z / jj
+                            # |E_j| <= |z|^j / j! below E_TINY (|z| < 1: the rest smaller):
+                            # the Cauchy products stop there (H2)
+                            if abs(E[hh, jj]) < E_TINY and abs(z) < 1.0:
+                                EL[hh] = jj + 1
                     for e in range(nTC):
                         for kk in range(nt):
                             a = 0.0
@@ -724,9 +762,9 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                                 a += (TOFF[hh, e] * E[hh, kk]).real
                             OFS[e, kk] = a
                     # (whole arrays, the first nt terms used: contiguous, no strided views)
-                    _coefficients_turning(MKC, g0, gS, q, v, h, Bv, ysc, E, tcols, krows, urows,
-                                          ZK, ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD,
-                                          FT, GV, VS, cturn, loads)
+                    _coefficients_turning(MKC, g0, gS, q, v, h, Bv, ysc, E, EL, tcols, krows,
+                                          urows, ZK, ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed,
+                                          P, PD, FT, GV, VS, cturn, loads)
                 else:
                     _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
                 if _converged(Bv, TAIL):
