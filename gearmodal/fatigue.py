@@ -74,7 +74,11 @@ def damage_equivalent_load(load, m: float, n_ref: float = N_REF) -> float:
         raise ModelError("m", f"= {m!r}: a Woehler exponent from 1 to 50")
     if not (isinstance(n_ref, (int, float)) and n_ref > 0 and math.isfinite(n_ref)):
         raise ModelError("n_ref", f"= {n_ref!r}: a number of cycles > 0")
-    c = rainflow_cycles(load)
+    return _del(rainflow_cycles(load), m, n_ref)
+
+
+def _del(c: pd.DataFrame, m: float, n_ref: float) -> float:
+    """(F1) of counted cycles ``c`` (:func:`rainflow_cycles`)."""
     if c.empty:
         return 0.0
     return float((np.sum(c["count"] * c["range"] ** m) / n_ref) ** (1.0 / m))
@@ -184,6 +188,9 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
     force at the fixed levels :data:`LEVELS`.
     """
     ex = {**WOEHLER, **(woehler or {})}
+    for key, m in ex.items():
+        if not (isinstance(m, (int, float)) and 1.0 <= m <= 50.0):
+            raise ModelError(f"woehler.{key}", f"= {m!r}: a Woehler exponent from 1 to 50")
     sim, tur = result.gearbox, result.turbine.loads
     if not (isinstance(t_skip, (int, float)) and 0 <= t_skip < float(sim.forces.index[-1])):
         raise ModelError("t_skip", f"= {t_skip!r}: must be >= 0 and shorter than the run")
@@ -209,11 +216,10 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
     short = min(life, key=lambda b: life[b]["l10_h"])
     t = np.asarray(f.index, dtype=float)
     revs = float(np.sum(_weights(t) * ratio * np.abs(speed) / 60.0))
+    cycles = [rainflow_cycles(f[c]) for c in flanks]  # counted once, read at both exponents
     row = {"duration_s": float(t[-1] - t[0]),
-           "del_tooth_N": max(damage_equivalent_load(f[c], ex["tooth_root"], n_ref)
-                              for c in flanks),
-           "del_tooth_flank_N": max(damage_equivalent_load(f[c], ex["tooth_flank"], n_ref)
-                                    for c in flanks),
+           "del_tooth_N": max(_del(c, ex["tooth_root"], n_ref) for c in cycles),
+           "del_tooth_flank_N": max(_del(c, ex["tooth_flank"], n_ref) for c in cycles),
            "del_planet_bearing_N": max(damage_equivalent_load(r, ex["bearing"], n_ref)
                                        for r in radial.values()),
            "l10_planet_bearing_h": life[short]["l10_h"],

@@ -120,6 +120,26 @@ def test_turbulence_is_seeded_and_sampled():
         Wind(turbulence_intensity=2.0)
 
 
+def test_turbulence_box_is_pyconturbs_frequency_by_frequency(monkeypatch):
+    """The box's coherence in one vectorised chunk is PyConTurb's frequency-by-frequency box
+    to rounding; a chunk size between 1 and the frequency count is not (PyConTurb 2.7 gives
+    the frequencies at multiples of the chunk another frequency's coherence), so only those
+    two are used, by the memory the chunk takes."""
+    from gearmodal.turbine import wind as wind_mod
+
+    kw = dict(mean_speed=10.0, hub_height=40.0, turbulence_intensity=0.12, duration=20.0,
+              dt=0.2, grid_points=4, seed=3)
+    nt = 101
+    assert wind_mod.coherence_chunk(nt, 48) == 51
+    assert wind_mod.coherence_chunk(6001, 147) == 1  # 600 s at 0.1 s, 7 x 7: 520 MB
+    fast = Wind(**kw)._turbulence()[3]
+    monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n: 1)
+    slow = Wind(**kw)._turbulence()[3]
+    np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-12 * np.abs(slow).max())
+    monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n: 16)
+    assert np.abs(Wind(**kw)._turbulence()[3] - slow).max() > 1e-3 * np.abs(slow).max()
+
+
 def test_turbine_loads_drive_the_gearbox():
     """The turbine's shaft loads (rotor torque, generator torque, shaft-end force) drive the
     600 kW drivetrain in operation: the carrier bearing then carries the shaft-end force."""

@@ -128,12 +128,14 @@ class AzimuthAssembler:
                 assert ea.shape[1:] == (n_c,)
             self.coef[k] = (np.concatenate([a, ea]), np.concatenate([b, eb]))
 
-    def _values(self, azimuth: float) -> dict[str, np.ndarray]:
+    def _values(self, azimuth: float, keys=None) -> dict[str, np.ndarray]:
+        """The arrays at ``azimuth`` (rad): every one, or those named in ``keys``."""
         c = np.cos(self.harmonics * azimuth)
         s = np.sin(self.harmonics * azimuth)
+        items = self.coef.items() if keys is None else ((k, self.coef[k]) for k in keys)
         return {k: (self.constant[k].copy() if k in self.constant
                     else np.tensordot(c, a, axes=1) + np.tensordot(s, b, axes=1))
-                for k, (a, b) in self.coef.items()}
+                for k, (a, b) in items}
 
     def assemble(self, azimuth: float) -> Assembly:
         """The :class:`~gearmodal.assembly.Assembly` at input azimuth ``azimuth`` (rad)."""

@@ -162,7 +162,7 @@ class PiecewiseLinearSystem:
         if self.load_columns is None:
             return u
         cols, constant = self.load_columns
-        B = self.at(azimuth)["B"][:, cols]
+        B = self.at(azimuth, ("B",))["B"][:, cols]
         F = B @ u[:len(cols)]
         return F + self.f_const * u[-1] if constant else F
 
@@ -180,12 +180,17 @@ class PiecewiseLinearSystem:
     #: input azimuth at the run's start (rad): set by the run (turning geometry, alternation)
     azimuth0 = 0.0
 
-    def at(self, azimuth: float) -> dict:
+    def at(self, azimuth: float, only: tuple | None = None) -> dict:
         """Frozen matrices at input ``azimuth`` (rad): ``K0``, ``C0``, ``W``, ``offset``, ``B``
-        (the reference methods of a turning system evaluate them at each instant)."""
+        (the reference methods of a turning system evaluate them at each instant); ``only``:
+        just these of ``W``, ``offset``, ``B`` (a turning system evaluates no others)."""
         if self.geometry is None:
             return {"K0": self.K0, "C0": self.C0, "W": self.asm.contacts.W,
                     "offset": self.asm.contacts.offset, "B": self.asm.B}
+        if only is not None:
+            names = {"W": "contacts.W", "offset": "contacts.offset", "B": "B"}
+            v = self.geometry._values(float(azimuth), [names[k] for k in only])
+            return {k: v[names[k]] for k in only}
         v = self.geometry._values(float(azimuth))
         om = self.omega
         C0 = v["C"] + om * self.asm.G
@@ -302,7 +307,7 @@ class PiecewiseLinearSystem:
         """Penetration ``W q - offset`` of every contact (a turning system: at input
         ``azimuth``, rad, default the run's start)."""
         if self.geometry is not None:
-            f = self.at(self.azimuth0 if azimuth is None else azimuth)
+            f = self.at(self.azimuth0 if azimuth is None else azimuth, ("W", "offset"))
             return f["W"] @ x[: self.n] - f["offset"]
         return self.W @ x[: self.n] - self.offset
 
@@ -321,7 +326,7 @@ class PiecewiseLinearSystem:
         equations' ``C = sum c w w^T``)."""
         if self.geometry is None:
             return self.W @ x[self.n:]
-        return self.at(self.azimuth0 if azimuth is None else azimuth)["W"] @ x[self.n:]
+        return self.at(self.azimuth0 if azimuth is None else azimuth, ("W",))["W"] @ x[self.n:]
 
     def _row_derivatives(self, azimuth: float) -> tuple[np.ndarray, np.ndarray]:
         """``dW/dpsi`` and ``d offset/dpsi`` of the contact rows at ``azimuth``."""

@@ -25,10 +25,24 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from ..errors import ModelError
 from ..model.schema import Field, Table
+
+#: bytes the coherence matrices of every frequency may take at once (PyConTurb ``nf_chunk``)
+COHERENCE_BYTES = 128 * 2**20
+
+
+def coherence_chunk(nt: int, n_points: int) -> int:
+    """PyConTurb's ``nf_chunk`` for a box of ``nt`` time steps and ``n_points`` columns: every
+    frequency in one chunk (its coherence in one vectorised call, 6x faster on the 30 s scene)
+    when they fit in :data:`COHERENCE_BYTES`, else 1. Nothing in between: PyConTurb 2.7 gives
+    each frequency at a multiple of a chunk size between 1 and the count the coherence of
+    another frequency (the same box only at those two settings; tests/test_turbine.py)."""
+    n_f = nt // 2 + 1
+    return n_f if n_f * n_points**2 * 8 <= COHERENCE_BYTES else 1
 
 
 @dataclass
@@ -128,7 +142,8 @@ class Wind:
                 df = gen_turb(spat, T=nt * self.dt, nt=nt, seed=int(self.seed),
                               u_ref=self.mean_speed, z_ref=self.hub_height,
                               wsp_func=constant_profile, sig_func=constant_sig,
-                              sig_vals=[sig, 0.8 * sig, 0.5 * sig], comps=[0, 1, 2])
+                              sig_vals=[sig, 0.8 * sig, 0.5 * sig], comps=[0, 1, 2],
+                              nf_chunk=coherence_chunk(nt, spat.shape[1]))
                 vals = df.to_numpy()[:nt]  # columns u_p0, v_p0, w_p0, u_p1, ...: y outer, z inner
                 box = vals.reshape(nt, ny, ny, 3).transpose(0, 3, 1, 2).copy()
                 box -= box.mean(axis=0, keepdims=True)  # the mean comes from the profile
@@ -163,10 +178,9 @@ class Wind:
         points ``(y, z)`` (m; ``z`` above ground), including shear and tower shadow."""
         y = np.asarray(y, dtype=float)
         z = np.asarray(z, dtype=float)
-        zc = np.maximum(z, 0.1)
-        u = self.mean_speed * (zc / self.hub_height) ** self.shear_exponent
-        out = np.zeros((3, *y.shape))
-        out[0] = u
+        shape = np.broadcast_shapes(y.shape, z.shape)
+        yf = np.ascontiguousarray(np.broadcast_to(y, shape)).ravel()
+        zf = np.ascontiguousarray(np.broadcast_to(z, shape)).ravel()
         if self.turbulent:
             tt, gy, gz, box = self._turbulence()
             if t > tt[-1] + 1e-9:
@@ -174,22 +188,44 @@ class Wind:
                                  f"{t:.3f} s beyond the turbulence generated")
             k = min(int(t / self.dt), len(tt) - 2)
             w = (t - tt[k]) / self.dt
-            frame = (1 - w) * box[k] + w * box[k + 1]
-            fy = np.clip((y - gy[0]) / (gy[1] - gy[0]), 0, len(gy) - 1 - 1e-12)
-            fz = np.clip((z - gz[0]) / (gz[1] - gz[0]), 0, len(gz) - 1 - 1e-12)
-            iy, iz = fy.astype(int), fz.astype(int)
+        else:
+            gy = gz = np.zeros(2)
+            box, k, w = np.zeros((2, 3, 2, 2)), 0, 0.0
+        out = _sample(yf, zf, float(self.mean_speed), float(self.hub_height),
+                      float(self.shear_exponent), self.turbulent, box, k, w, gy[0],
+                      gy[1] - gy[0], gz[0], gz[1] - gz[0], float(self.tower_radius),
+                      float(self.tower_distance))
+        return out.reshape((3, *shape))
+
+
+@numba.njit(cache=True)
+def _sample(y, z, U, z_hub, alpha, turbulent, box, k, w, y0, dy, z0, dz, r_tower, x_tower):
+    """:meth:`Wind.velocity` at the points ``(y[i], z[i])``: power-law shear, the box
+    frames ``k`` and ``k + 1`` blended by ``w`` and interpolated bilinearly (clipped to the
+    grid), the potential-flow tower shadow below the hub (3, n)."""
+    n = y.shape[0]
+    ny, nz = box.shape[2], box.shape[3]
+    out = np.zeros((3, n))
+    for i in range(n):
+        zc = max(z[i], 0.1)
+        out[0, i] = U * (zc / z_hub) ** alpha
+        if turbulent:
+            fy = min(max((y[i] - y0) / dy, 0.0), ny - 1 - 1e-12)
+            fz = min(max((z[i] - z0) / dz, 0.0), nz - 1 - 1e-12)
+            iy, iz = int(fy), int(fz)
             ay, az = fy - iy, fz - iz
             for c in range(3):
-                f = frame[c]
-                out[c] += ((1 - ay) * (1 - az) * f[iy, iz] + ay * (1 - az) * f[iy + 1, iz]
-                           + (1 - ay) * az * f[iy, iz + 1] + ay * az * f[iy + 1, iz + 1])
-        if self.tower_radius > 0:
-            x = self.tower_distance
-            below = z < self.hub_height
-            r2 = x * x + y * y
-            shadow = 1.0 - self.tower_radius**2 * (x * x - y * y) / (r2 * r2)
-            out[0] = np.where(below, out[0] * shadow, out[0])
-        return out
+                v = 0.0
+                for f, wf in ((k, 1.0 - w), (k + 1, w)):
+                    v += wf * ((1 - ay) * (1 - az) * box[f, c, iy, iz]
+                               + ay * (1 - az) * box[f, c, iy + 1, iz]
+                               + (1 - ay) * az * box[f, c, iy, iz + 1]
+                               + ay * az * box[f, c, iy + 1, iz + 1])
+                out[c, i] += v
+        if r_tower > 0 and z[i] < z_hub:
+            r2 = x_tower * x_tower + y[i] * y[i]
+            out[0, i] *= 1.0 - r_tower * r_tower * (x_tower * x_tower - y[i] * y[i]) / (r2 * r2)
+    return out
 
 
 #: the ``[wind]`` table of a scene file (:mod:`gearmodal.model.schema`)
