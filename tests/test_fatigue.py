@@ -66,8 +66,9 @@ def test_damage_equivalent_loads_of_a_run_and_bad_input():
 
 
 def test_counting_on_the_turning_points_gives_the_same_cycles():
-    """The count reads only the series' turning points (fatigue._reversals): on random walks
-    with plateaus it gives exactly the cycles of the rainflow package on every sample."""
+    """The count (fatigue._count, the three-point loop in numba) reads only the series'
+    turning points (fatigue._reversals): on random walks with plateaus it gives exactly the
+    cycles of the rainflow package, the reference, on every sample, in the same order."""
     import rainflow
 
     from gearmodal.fatigue import rainflow_cycles

@@ -175,12 +175,15 @@ class SimulationResult:
         out: dict[str, list] = {}
         state = dict(self.initial_state)
         start = {k: t0 for k, v in state.items() if v}
-        for row in self.events.itertuples(index=False):
-            key = f"{row.element}:{row.contact}"
-            if row.state_after == "closed":
-                start[key] = row.time
+        ev = self.events
+        for time_, el, contact, after in zip(ev["time"].to_numpy(float), ev["element"].tolist(),
+                                             ev["contact"].tolist(), ev["state_after"].tolist(),
+                                             strict=True):
+            key = f"{el}:{contact}"
+            if after == "closed":
+                start[key] = time_
             elif key in start:
-                out.setdefault(key, []).append((start.pop(key), row.time))
+                out.setdefault(key, []).append((start.pop(key), time_))
         for key, s in start.items():
             out.setdefault(key, []).append((s, t1))
         return out
@@ -197,11 +200,18 @@ class SimulationResult:
         meshes = sorted({k.rsplit(":", 1)[0] for k in iv if k.endswith((":front", ":back"))})
         rows = []
         for m in meshes:
-            for a0, a1 in iv.get(f"{m}:front", []):
-                for b0, b1 in iv.get(f"{m}:back", []):
-                    s, e = max(a0, b0), min(a1, b1)
-                    if e > s:
-                        rows.append((s, e, e - s, m, self.planet_of(m), 1))
+            # the overlaps of two time-ordered lists of disjoint intervals: one merge pass
+            fr, bk = iv.get(f"{m}:front", []), iv.get(f"{m}:back", [])
+            planet = self.planet_of(m)
+            i = j = 0
+            while i < len(fr) and j < len(bk):
+                s, e = max(fr[i][0], bk[j][0]), min(fr[i][1], bk[j][1])
+                if e > s:
+                    rows.append((s, e, e - s, m, planet, 1))
+                if fr[i][1] < bk[j][1]:
+                    i += 1
+                else:
+                    j += 1
         single = pd.DataFrame(rows, columns=["start", "end", "duration", "mesh", "planet",
                                              "n_planets"]).sort_values("start",
                                                                        ignore_index=True)
@@ -214,11 +224,22 @@ class SimulationResult:
                                                                         r.planet))
         for stage, eps in by_stage.items():
             label = f"{stage} (several planets)" if stage else "several planets"
-            marks = sorted({x for s, e, _ in eps for x in (s, e)})
+            # one pass over the episodes' ends in time order, counting each planet's open
+            # episodes: between two consecutive marks the planets with one open
+            edges = sorted([(s, 1, p) for s, e, p in eps] + [(e, -1, p) for s, e, p in eps])
+            count: dict[str, int] = {}
+            spans = []
+            i = 0
+            while i < len(edges):
+                a = edges[i][0]
+                while i < len(edges) and edges[i][0] == a:
+                    count[edges[i][2]] = count.get(edges[i][2], 0) + edges[i][1]
+                    i += 1
+                if i < len(edges):
+                    spans.append((a, edges[i][0],
+                                  tuple(sorted(p for p, c in count.items() if c > 0))))
             current = None
-            for a, b in zip(marks[:-1], marks[1:], strict=True):
-                mid = 0.5 * (a + b)
-                planets = tuple(sorted({p for s, e, p in eps if s <= mid < e}))
+            for a, b, planets in spans:
                 if len(planets) >= 2 and current and current[2] == planets and current[1] == a:
                     current[1] = b
                     continue
