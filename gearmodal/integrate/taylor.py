@@ -282,6 +282,8 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows
         _frozen_term(MKC, B, y, k, h, den, g0, g1)
         if loads:
             for hh in range(1, H1):
+                if k > EL[hh]:
+                    continue  # E_h[k] = E_h[k - 1] = 0 (P3)
                 ek = E[hh, k] * h2 * den
                 ek1 = E[hh, k - 1] * (h2 * h * den) if k > 0 else 0j
                 for i in range(n):
@@ -630,6 +632,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     stk = np.empty((2, DEPTH + 1))
     ysc = np.empty(2 * n + nz)
     roots = np.empty(nc)
+    colsum = np.empty(n)
     order = np.empty(nc, dtype=np.int64)
     order_est = np.empty(nc)
     gF = np.empty(n)
@@ -820,10 +823,25 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 if gb[e] <= 0.0:
                     order[n_order] = e
                     n_order += 1
+            # each coordinate's series summed in magnitude (k >= 1): a contact's gap moves by at
+            # most sum_j |w_j| A_j over the piece, which clears most gaps without their series
+            for i in range(n):
+                colsum[i] = 0.0
+            for kk in range(1, nt):
+                for i in range(n):
+                    colsum[i] += abs(Bv[kk, i])
             for o in range(n_order):
                 e = order[o]
                 limit = min(best + simultaneous / h, 1.0)
                 sg = -1.0 if s[e] else 1.0
+                if o >= n_cert and wptr[e + 1] > wptr[e]:
+                    g0e = -off[e]
+                    move = 0.0
+                    for jj in range(wptr[e], wptr[e + 1]):
+                        g0e += wval[jj] * Bv[0, widx[jj]]
+                        move += abs(wval[jj]) * colsum[widx[jj]]
+                    if sg * g0e + move < 0.0:
+                        continue  # no crossing on the piece ((B1) a fortiori)
                 # the gap's series, scaled to [0, limit]: nonzero by nonzero of the gap row
                 # (independent sums over the terms; -5 % of the run against term by term)
                 for kk in range(nt):
