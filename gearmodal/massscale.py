@@ -1,6 +1,6 @@
 """Selective mass scaling: the fidelity rung that slows the fast mesh modes (issue 19).
 
-The exact method sums each piece's series over ``rho h <= 4`` with ``rho`` the fastest
+The exact method sums each piece's series over ``rho h <= 6`` with ``rho`` the fastest
 frequency of the system; on the 600 kW drivetrain the kHz mesh modes (the sun's torsion on its
 flanks at 3.1 kHz, the pinions at 2.1-2.3 kHz) set ``rho`` while the turbine's loads excite
 nothing above a few hundred Hz. This rung adds mass only along the modes above a chosen

@@ -14,7 +14,7 @@ def test_exact_holds_where_newmark_fails():
     name = "rattle k=1e+08 m=1 b=0.001"
     exact = sm.run_one(name, dict(method="exact", propagator="taylor"), budget_s=60)
     status, drift, _ = sm.classify(exact, None)
-    # undamped: conserved to rounding, ~1e-16 per piece over ~1e4 pieces of rho h <= 4
+    # undamped: conserved to rounding, ~1e-16 per piece over ~1e4 pieces of rho h <= 6
     assert status == "ok" and drift < 1e-10
     newmark = sm.run_one(name, dict(method="newmark"), budget_s=60)
     status, drift, traj = sm.classify(newmark, exact)

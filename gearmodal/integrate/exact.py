@@ -136,7 +136,7 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     an (n, 6) array from the Taylor propagator, a list of tuples from ``"expm"``.
 
     ``propagator``: ``"taylor"`` (default) sums the Taylor series of the exact solution in
-    numba from every event and over pieces of ``rho h <= 4`` (:mod:`gearmodal.integrate.taylor`;
+    numba from every event and over pieces of ``rho h <= 6`` (:mod:`gearmodal.integrate.taylor`;
     no per-state setup, the event loop never returns to Python); ``"expm"`` propagates with
     augmented exponentials cached per contact state and dyadic step (``ExactIntegrator``;
     ~170 us per new state, then one product per output step). Both are exact to rounding;

@@ -1,0 +1,1194 @@
+"""All-numba Taylor propagation of the exact method (DESIGN 3.2), for event-dense runs.
+
+Inside one contact state the motion is linear, ``M q'' + C_s q' + K_s q = F(t) + f_s`` with the
+force linear over each output step (first-order hold), so the exact solution from any instant
+is an entire function of time whose Taylor coefficients follow from the recursion::
+
+    a_0 = q,  a_1 = v,
+    (k + 1)(k + 2) a_(k+2) = g_k - M^-1 K_s a_k - (k + 1) M^-1 C_s a_(k+1)        (T1)
+    g_0 = M^-1 (F(t) + f_s),  g_1 = M^-1 F',  g_k = 0 for k >= 2
+
+(``q(t + tau) = sum_k a_k tau^k``). A piece of length ``h`` with ``rho h <= reach``, ``rho`` a
+bound of the spectral radius of every contact state's first-order matrix, is summed to
+machine precision by ``n_terms`` terms (truncation ~ ``reach^n_terms / n_terms!``); the scaled
+coefficients ``b_k = a_k h^k`` are kept so that nothing overflows in stiff states, and a piece
+whose last terms are not negligible against its largest (a state stiffer than the bound) is
+halved by rescaling ``b_k`` by ``2^-k`` until they are.
+
+No per-state setup beyond two rank-one sums (``M^-1 K_s``, ``M^-1 C_s`` from the always-active
+part plus the closed contacts): a new contact state costs nothing like the augmented matrix
+exponential of :mod:`gearmodal.integrate.system`, which is what makes runs in which almost
+every event enters a new state (a carrier rattling in its clearance against three planets)
+cheap. Events: every contact's gap polynomial over the piece (the Taylor series of the exact
+solution projected on the contact) is bounded above by its start value plus its positive
+coefficients; where that bound does not exclude a crossing (and for every gap that has
+crossed by the piece's end) it is searched for its first root by Bernstein subdivision
+(:func:`first_root`), which cannot miss a root of the polynomial, and located to adjacent
+floating-point numbers. No sampling of the gaps is involved, so the piece length is set by
+the series alone (``REACH``), not by a fraction of the fastest period. Right after an event
+that came quickly, the next piece is a quarter as long with fewer terms (the next event is
+likely near).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import types
+
+import numba
+import numpy as np
+
+from ..errors import ModelError
+from .kernels import GRAZE_MARGIN, SIMULTANEOUS, _bisect_up
+from .kernels import _poly as _hpoly
+
+#: rho * (piece length) at most this: every modal component turns by at most 4 rad per piece.
+#: The largest term of a mode's series, REACH^4 / 4! = 10.7 times its amplitude, bounds the
+#: cancellation (about one digit); 2 cost 3-16 % more gearbox time on the coupled turbine run,
+#: 6 gained nothing there (output steps cap the pieces) and cancels two digits
+REACH = 4.0
+#: terms of the series at REACH (``terms_for(REACH)``): REACH^N / N! = 8.5e-18
+N_TERMS = 33
+#: stack size of the Bernstein subdivision, and its smallest interval (2^-DEPTH of a piece,
+#: below the resolution of a double in [0, 1])
+DEPTH = 60
+MIN_WIDTH = 2.0**-DEPTH
+#: a system re-based to a slightly different speed reuses the previous bound times this
+RHO_SPEED = 1.01
+#: contact switches applied as rank-one updates before the state's matrices are rebuilt
+REFRESH = 64
+#: the last two scaled terms (times k, for the velocities) must be below this fraction of the
+#: largest one. Stricter than the truncation bound of ``terms_for`` (the first omitted term):
+#: a piece at the full reach whose fastest mode dominates the rows is halved once (review
+#: finding; costs time only, 3 of 563 pieces on the planetary stage)
+TAIL = 1e-15
+#: a term of a turning harmonic's exponential series ``E_h`` (modulus 1 at its start) below
+#: this ends it in the Cauchy products (P3): what is left is below 1e-20 of the piece's
+#: largest coefficient, far under the series' own truncation (``TAIL``)
+E_TINY = 2.0**-70
+#: resolution of the per-piece term count (fractions of the reach)
+TERM_BINS = 64
+#: numba fast-math flags of the small dense loops: reassociation (vectorised sums and maxima)
+#: but no "no NaN / no inf" assumption, so that a non-finite state is still seen as such
+FAST = {"reassoc", "nsz", "arcp", "contract"}
+
+
+def terms_for(reach: float, tol: float = 3e-17) -> int:
+    """Smallest number of terms whose truncation bound ``reach^n / n!`` is below ``tol``."""
+    n, term = 1, reach
+    while term > tol and n < 200:
+        n += 1
+        term *= reach / n
+    return n
+
+
+@functools.lru_cache(maxsize=16)
+def _term_table(reach: float, n_terms: int = 0) -> tuple:
+    """Terms by the piece's reach ``rho h``, in 64ths of ``reach`` rounded up, plus the full
+    count last (at least 6: the forcing enters at the 4th term; the tail check guards every
+    piece anyway). An explicit ``n_terms`` (> 0) is used for every piece. Constants of the
+    run's settings: computed once per process (65 ``terms_for`` loops, ~0.15 ms)."""
+    full = n_terms if n_terms else terms_for(reach)
+    if n_terms:
+        return (full,) * (TERM_BINS + 1)
+    return tuple(min(max(terms_for(reach * j / TERM_BINS), 6), full)
+                 for j in range(TERM_BINS)) + (full,)
+
+
+@numba.njit(cache=True)
+def _toggle(U, W, kc, cc, off, e, sign, MKC, acc):
+    """Add (sign 1) or remove (sign -1) contact ``e``'s rank-one terms in place."""
+    n = W.shape[1]
+    ke, ce, fe = sign * kc[e], sign * cc[e], sign * kc[e] * off[e]
+    for i in range(n):
+        ui = U[e, i]
+        if ui != 0.0:
+            acc[i] += fe * ui
+            for j in range(n):
+                wj = W[e, j]
+                MKC[i, j] += ke * ui * wj
+                MKC[i, n + j] += ce * ui * wj
+
+
+@numba.njit(cache=True)
+def _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc):
+    """``M^-1 K_s``, ``M^-1 C_s`` and ``M^-1 f_s`` of contact state ``s`` (rank-one sums of
+    ``u_e w_e^T``, ``u_e = M^-1 w_e``, over the closed contacts; system.matrices)."""
+    n = MK0.shape[0]
+    for i in range(n):
+        acc[i] = 0.0
+        for j in range(n):
+            MKC[i, j] = MK0[i, j]
+            MKC[i, n + j] = MC0[i, j]
+    for e in range(W.shape[0]):
+        if s[e]:
+            _toggle(U, W, kc, cc, off, e, 1.0, MKC, acc)
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _term(MKC, B, y, k, c2, c1):
+    """``B[k + 2] = [M^-1 K_s, M^-1 C_s, Z] [c2 B[k]; c1 B[k + 1]; y_Z]``: the frozen part of
+    (T1), plus the turning rows of (T2) when ``MKC`` has the columns ``Z`` of the turning
+    harmonics (``y[2 n:]`` set by the caller)."""
+    n = B.shape[1]
+    n2 = n - n % 2
+    w = MKC.shape[1]  # 2 n, or more with the turning columns (their y filled by the caller)
+    for j in range(n):
+        y[j] = B[k, j] * c2
+        y[n + j] = B[k + 1, j] * c1
+    # two rows at a time: two independent sums hide the latency of each (-12 %)
+    for i in range(0, n2, 2):
+        a0 = 0.0
+        a1 = 0.0
+        for j in range(w):
+            yj = y[j]
+            a0 += MKC[i, j] * yj
+            a1 += MKC[i + 1, j] * yj
+        B[k + 2, i] = a0
+        B[k + 2, i + 1] = a1
+    for i in range(n2, n):
+        a = 0.0
+        for j in range(w):
+            a += MKC[i, j] * y[j]
+        B[k + 2, i] = a
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _frozen_term(MKC, B, y, k, h, den, g0, g1):
+    """Row ``k + 2`` of (T1): the frozen product and the forcing terms ``g0``, ``g1`` (the
+    force at the piece's start and its rate enter rows 2 and 3 only)."""
+    n = B.shape[1]
+    h2 = h * h
+    _term(MKC, B, y, k, -h2 * den, -(k + 1.0) * h * den)
+    if k == 0:
+        for i in range(n):
+            B[2, i] += g0[i] * h2 * den
+    elif k == 1:
+        for i in range(n):
+            B[3, i] += g1[i] * h2 * h * den
+
+
+@numba.njit(cache=True, fastmath=True)
+def _coefficients(MKC, g0, g1, q, v, h, B, y):
+    """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions by (T1) with the forcing terms
+    ``g0``, ``g1``; ``MKC`` is ``[M^-1 K_s, M^-1 C_s]`` side by side (one contiguous product
+    per term); ``y`` is scratch of length 2 n (no allocation in the hot loop)."""
+    n_terms, n = B.shape
+    for i in range(n):
+        B[0, i] = q[i]
+        B[1, i] = v[i] * h
+    for k in range(n_terms - 2):
+        den = 1.0 / ((k + 1.0) * (k + 2.0))
+        _frozen_term(MKC, B, y, k, h, den, g0, g1)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC, Y,
+                          Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads):
+    """:func:`_coefficients` of the time-varying system (T2): the frozen part as (T1), plus
+    the turning harmonics of :mod:`gearmodal.integrate.periodic` by Cauchy products with the
+    piece's exponential series ``E`` (H1, n_terms) ((P2), ``E[0]`` the constant 1):
+
+        Y_h[k] = sum_j E_h[j] b_(k-j),   Yd_h[k] = sum_j E_h[j] (k - j + 1) b_(k-j+1)
+        b_(k+2) += h^2 den (-Re sum_h ZK_h Y_h[k] - Re sum_h ZC_h Yd_h[k] / h
+                            - Re sum_(h, e closed) TU_(h,e) (E_h * f_e)[k]
+                            + Re sum_h (E_h[k] GV_h + h E_h[k-1] GVS_h))                (T2)
+
+    with ``den = 1 / ((k + 1)(k + 2))``, the turning contacts' penetration series ``P[e, k] =
+    Re sum_h TW_(h,e) . Y_h[k] - OFS[e, k]`` (also kept for their root search), ``PD`` the
+    series of ``w . q_s`` and their force series ``f_e = kt P + ct PD / h`` (``FT``).
+    ``Y``, ``Yd`` (H1, n_terms, nT) complex and ``FT`` are scratch; ``GV``, ``GVS`` (H1, n) the
+    turning loads ``M^-1 Z_h u`` at the piece's start and their rates. ``Y``, ``Yd`` hold
+    real and imaginary parts in their first axis (2, H1, n_terms, nT) and ``Bt`` (n_terms, nT)
+    the turning coordinates' rows of ``B``: real, contiguous sums that vectorise."""
+    n_terms, n = B.shape
+    H1 = E.shape[0]
+    nT = tcols.shape[0]
+    nTC = TW.shape[1]
+    h2 = h * h
+    # what the turning parts need: the rate products for a turning damping (``cturn``) or a
+    # turning contact with damping; the constant harmonic for the contacts' rows only;
+    # ``loads``: some turning load is nonzero over this output step
+    rates = cturn
+    for e in range(nTC):
+        if ct[e] != 0.0:
+            rates = True
+    h_lo = 0 if nTC > 0 else 1
+    for i in range(n):
+        B[0, i] = q[i]
+        B[1, i] = v[i] * h
+    for c in range(nT):
+        Bt[0, c] = B[0, tcols[c]]
+    for k in range(n_terms):
+        # the Cauchy products of what is known: b_0..b_k (and b_(k+1) for the rates)
+        if k + 1 < n_terms:
+            for c in range(nT):
+                Bt[k + 1, c] = B[k + 1, tcols[c]]
+        for hh in range(h_lo, H1):
+            for c in range(nT):
+                Y[0, hh, k, c] = 0.0
+                Y[1, hh, k, c] = 0.0
+            for j in range(min(k + 1, EL[hh])):
+                er = E[hh, j].real
+                ei = E[hh, j].imag
+                for c in range(nT):
+                    b = Bt[k - j, c]
+                    Y[0, hh, k, c] += er * b
+                    Y[1, hh, k, c] += ei * b
+            if rates and k + 1 < n_terms:
+                for c in range(nT):
+                    Yd[0, hh, k, c] = 0.0
+                    Yd[1, hh, k, c] = 0.0
+                for j in range(min(k + 1, EL[hh])):
+                    f = k - j + 1.0
+                    er = E[hh, j].real * f
+                    ei = E[hh, j].imag * f
+                    for c in range(nT):
+                        b = Bt[k - j + 1, c]
+                        Yd[0, hh, k, c] += er * b
+                        Yd[1, hh, k, c] += ei * b
+        for e in range(nTC):
+            pr = -OFS[e, k]
+            pd = 0.0
+            for hh in range(H1):
+                for c in range(nT):
+                    w = TW[hh, e, c]
+                    pr += w.real * Y[0, hh, k, c] - w.imag * Y[1, hh, k, c]
+                    if rates and k + 1 < n_terms:
+                        pd += w.real * Yd[0, hh, k, c] - w.imag * Yd[1, hh, k, c]
+            P[e, k] = pr
+            PD[e, k] = pd
+            FT[e, k] = kt[e] * pr + ct[e] * pd / h if closed[e] else 0.0
+        if k + 2 >= n_terms:
+            continue
+        den = 1.0 / ((k + 1.0) * (k + 2.0))
+        # the turning rows' inputs, laid out as the columns Z of MKC (see taylor_run):
+        # [Re Y_h, Im Y_h] per harmonic h >= 1, then [Re Yd_h, Im Yd_h] with a turning damping
+        ck = -h2 * den
+        cd = -h * den
+        o = 2 * n
+        for hh in range(1, H1):
+            for c in range(nT):
+                y[o + c] = ck * Y[0, hh, k, c]
+                y[o + nT + c] = ck * Y[1, hh, k, c]
+            o += 2 * nT
+        if cturn:
+            for hh in range(1, H1):
+                for c in range(nT):
+                    y[o + c] = cd * Yd[0, hh, k, c]
+                    y[o + nT + c] = cd * Yd[1, hh, k, c]
+                o += 2 * nT
+        _frozen_term(MKC, B, y, k, h, den, g0, g1)
+        if loads:
+            for hh in range(1, H1):
+                ek = E[hh, k] * h2 * den
+                ek1 = E[hh, k - 1] * (h2 * h * den) if k > 0 else 0j
+                for i in range(n):
+                    B[k + 2, i] += (ek * GV[hh, i] + ek1 * GVS[hh, i]).real
+        for e in range(nTC):
+            if not closed[e]:
+                continue
+            for hh in range(H1):
+                fe = 0j
+                for j in range(min(k + 1, EL[hh])):
+                    fe += E[hh, j] * FT[e, k - j]
+                fe *= h2 * den
+                for i in urows:
+                    B[k + 2, i] -= (TU[hh, e, i] * fe).real
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def _converged(B, tail):
+    n_terms, n = B.shape
+    big = 0.0
+    for k in range(n_terms):
+        row = 0.0
+        for i in range(n):  # row by row: a contiguous max that vectorises
+            row = max(row, abs(B[k, i]))
+        big = max(big, row * max(k, 1))
+    if big == 0.0 or not np.isfinite(big):
+        return True  # (a non-finite state is reported by the caller)
+    last = 0.0
+    for k in range(n_terms - 2, n_terms):
+        row = 0.0
+        for i in range(n):
+            row = max(row, abs(B[k, i]))
+        last = max(last, row * k)
+    return last <= tail * big
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def _evaluate(B, tau, h, q, v):
+    """Positions and velocities at ``tau`` (0..1 of the piece) from the scaled rows (Horner,
+    term by term over all coordinates: contiguous rows that vectorise)."""
+    n_terms, n = B.shape
+    top = n_terms - 1
+    for i in range(n):
+        q[i] = B[top, i]
+        v[i] = top * B[top, i]
+    for k in range(n_terms - 2, 0, -1):
+        for i in range(n):
+            q[i] = q[i] * tau + B[k, i]
+            v[i] = v[i] * tau + k * B[k, i]
+    for i in range(n):
+        q[i] = q[i] * tau + B[0, i]
+        v[i] = v[i] / h
+
+
+@numba.njit(cache=True)
+def _gaps(wptr, widx, wval, off, s, q, v, g, r):
+    """Signed gaps (> 0: the contact must switch) and their rates (``W`` by sparse rows)."""
+    nc = off.shape[0]
+    for e in range(nc):
+        p = -off[e]
+        rr = 0.0
+        for jj in range(wptr[e], wptr[e + 1]):
+            i = widx[jj]
+            p += wval[jj] * q[i]
+            rr += wval[jj] * v[i]
+        sg = -1.0 if s[e] else 1.0
+        g[e] = sg * p
+        r[e] = sg * rr
+
+
+#: Pascal's triangle ``PASCAL[i, k] = C(i, k)`` and ``INV_BINOM[d, k] = 1 / C(d, k)`` up to
+#: degree ``TABLE_DEGREE`` (a full-reach piece has degree 23), frozen into the compiled
+#: kernels as constants: the basis change of :func:`_bernstein` as vectorised sums
+TABLE_DEGREE = 40
+PASCAL = np.zeros((TABLE_DEGREE + 1, TABLE_DEGREE + 1))
+for _i in range(TABLE_DEGREE + 1):
+    for _k in range(_i + 1):
+        PASCAL[_i, _k] = math.comb(_i, _k)
+INV_BINOM = np.where(PASCAL > 0, 1.0 / np.where(PASCAL > 0, PASCAL, 1.0), 0.0)
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def _bernstein(c, b):
+    """Bernstein coefficients on [0, 1] of ``sum c_k tau^k``: ``b_i = sum_(k <= i) C(i, k) /
+    C(d, k) c_k`` (the monomial-to-Bernstein basis change) as vectorised dot products over
+    the tabulated binomials, last row first so that ``b`` can hold the scaled ``c`` (3x
+    faster than repeated summation, a chain of dependent additions, which is kept beyond
+    ``TABLE_DEGREE``)."""
+    d = c.shape[0] - 1
+    if d <= TABLE_DEGREE:
+        for k in range(d + 1):
+            b[k] = c[k] * INV_BINOM[d, k]
+        for i in range(d, -1, -1):
+            acc = 0.0
+            for k in range(i + 1):
+                acc += PASCAL[i, k] * b[k]
+            b[i] = acc
+        return
+    binom = 1.0
+    for k in range(d + 1):
+        b[k] = c[k] / binom
+        binom = binom * (d - k) / (k + 1.0)
+    for j in range(1, d + 1):
+        for i in range(d, j - 1, -1):
+            b[i] += b[i - 1]
+
+
+@numba.njit(cache=True)
+def _split(b, left, right, w):
+    """de Casteljau at 1/2: Bernstein coefficients of the two halves (``w``: scratch)."""
+    d = b.shape[0] - 1
+    w[:] = b
+    left[0] = w[0]
+    right[d] = w[d]
+    for r in range(1, d + 1):
+        for i in range(d - r + 1):
+            w[i] = 0.5 * (w[i] + w[i + 1])
+        left[r] = w[0]
+        right[d - r] = w[d - r]
+
+
+@numba.njit(cache=True, fastmath=FAST)
+def _max(b):
+    """Largest entry (a vectorised maximum)."""
+    mx = b[0]
+    for i in range(1, b.shape[0]):
+        mx = max(mx, b[i])
+    return mx
+
+
+@numba.njit(cache=True)
+def _value_slope(coef, t):
+    """``g(t)`` and ``g'(t)`` by one Horner pass (two independent chains: about the latency
+    of one)."""
+    m = coef.shape[0]
+    g = coef[m - 1]
+    dg = 0.0
+    for k in range(m - 2, -1, -1):
+        dg = dg * t + g
+        g = g * t + coef[k]
+    return g, dg
+
+
+@numba.njit(cache=True)
+def _refine(coef, lo, hi, glo, ghi):
+    """The crossing of ``g`` inside [lo, hi] (``glo = g(lo) <= 0 < ghi = g(hi)``, one root):
+    Newton's method kept inside the bracket (bisection when a step leaves it), the bracket
+    closed around the converged point, then bisection to adjacent floating-point numbers;
+    returns the upper end (g > 0)."""
+    x = (lo * ghi - hi * glo) / (ghi - glo) if ghi > glo else 0.5 * (lo + hi)
+    if not (lo < x < hi):
+        x = 0.5 * (lo + hi)
+    for _ in range(40):
+        gx, dx = _value_slope(coef, x)
+        if gx > 0.0:
+            hi = x
+        else:
+            lo = x
+        if hi - lo <= 4.0 * np.spacing(hi):
+            break
+        xn = x - gx / dx if dx != 0.0 else 0.5 * (lo + hi)
+        if gx == 0.0 or abs(xn - x) <= 4.0 * np.spacing(x):
+            # converged: close the bracket a few units in the last place either side
+            d = 4.0 * np.spacing(x)
+            if lo < x - d and _hpoly(coef, x - d) <= 0.0:
+                lo = x - d
+            if x + d < hi and _hpoly(coef, x + d) > 0.0:
+                hi = x + d
+            break
+        x = xn if lo < xn < hi else 0.5 * (lo + hi)
+    return _bisect_up(coef, lo, hi)
+
+
+@numba.njit(cache=True)
+def first_root(coef, work, stk):
+    """First crossing of ``g(tau) = sum coef[k] tau^k`` from <= 0 to > 0 in [0, 1]; ``inf``
+    if none (callers search [0, L] by scaling ``coef[k]`` by ``L^k``).
+
+    Rigorous root isolation by Bernstein subdivision: an interval whose Bernstein
+    coefficients are all <= 0 holds no crossing (convex hull property); one whose coefficients
+    change sign once holds exactly one (Descartes' rule for the Bernstein basis), located by
+    Newton's method and bisection on ``g`` to adjacent floating-point numbers (the returned
+    point has g > 0); otherwise it is halved, left half first. A negative ``g(0)`` plus the
+    positive coefficients below zero excludes a root at once. At tau = 0, a gap that is due
+    (positive and rising, or zero with its first nonzero derivative positive) gives 0; a gap
+    left positive by rounding but receding is treated as zero. ``work`` (depth + 5, d + 1)
+    and ``stk`` (2, depth + 1) are scratch.
+    """
+    d = coef.shape[0] - 1
+    if work.shape[1] != d + 1:  # (rows of another width would be read past the polynomial)
+        raise ValueError("first_root: work needs one column per coefficient")
+    big = 0.0
+    for k in range(d + 1):
+        if not np.isfinite(coef[k]):
+            return np.inf  # a non-finite state: the caller reports it, no search can end
+        big = max(big, abs(coef[k]))
+    g0 = coef[0]
+    if g0 > 0.0 and (d == 0 or coef[1] > 0.0):
+        return 0.0
+    if g0 < 0.0:
+        # g <= g0 + sum of the positive coefficients on [0, 1]: often enough
+        ub = g0
+        for k in range(1, d + 1):
+            if coef[k] > 0.0:
+                ub += coef[k]
+        if ub <= 0.0:
+            return np.inf
+    depth_max = work.shape[0] - 5
+    c = work[depth_max + 1]
+    left = work[depth_max + 2]
+    right = work[depth_max + 3]
+    poly = coef
+    if big > 1e300:
+        # the basis change and Horner's sums reach (d + 1) max |c_k|: scaled by a power of two
+        # (the same roots, exactly) they cannot overflow into inf - inf (review finding: such
+        # intervals were split down to MIN_WIDTH)
+        poly = work[depth_max + 4]
+        f = math.ldexp(1.0, -math.frexp(big)[1])
+        for k in range(d + 1):
+            poly[k] = coef[k] * f
+    if g0 >= 0.0:
+        c[:] = poly
+        c[0] = 0.0
+        for k in range(1, d + 1):
+            if c[k] != 0.0:
+                if c[k] > 0.0:
+                    return 0.0
+                break
+        _bernstein(c, work[0])
+    else:
+        _bernstein(poly, work[0])
+    stk[0, 0] = 0.0
+    stk[1, 0] = 1.0
+    top = 1
+    while top > 0:
+        top -= 1
+        a = stk[0, top]
+        b = work[top]  # (read by _split before its row is overwritten)
+        w = stk[1, top]
+        if _max(b) <= 0.0:
+            continue  # the usual outcome for a flagged near miss: no crossing, no split
+        if b[0] > 0.0:
+            return a  # the left neighbours hold no crossing
+        changes = 0
+        prev = b[0]
+        for i in range(1, d + 1):
+            if b[i] != 0.0:
+                if prev != 0.0 and (b[i] > 0.0) != (prev > 0.0):
+                    changes += 1
+                prev = b[i]
+        if changes == 1 and b[d] > 0.0:
+            hi = a + w
+            ghi = _hpoly(poly, hi)
+            if ghi > 0.0:
+                return _refine(poly, a, hi, _hpoly(poly, a), ghi)
+        if top + 2 > depth_max or w < MIN_WIDTH:
+            # below the resolution of time (or out of stack): a crossing at the right end if
+            # the polynomial ends positive there, else none in this interval
+            if b[d] > 0.0:
+                return a + w
+            continue
+        _split(b, left, right, c)
+        work[top, :] = right
+        stk[0, top] = a + 0.5 * w
+        stk[1, top] = 0.5 * w
+        work[top + 1, :] = left
+        stk[0, top + 1] = a
+        stk[1, top + 1] = 0.5 * w
+        top += 2
+    return np.inf
+
+
+@numba.njit(cache=True)
+def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0, n_steps,
+               dt, h_max,
+               terms, tscale, margin, simultaneous, max_events, X, S, EV, n_ev,
+               counts, sched_t, sched_e, sched_k, sched_pos,
+               om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT,
+               reach, per_state, Ksym, Wl, km, c0, kappa, rho_keys, rho_vals):
+    """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
+
+    ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
+    ``MinvU`` (linear in between); rows ``X[k + 1]``, ``S[k + 1]`` are written after each step
+    and every contact-state change appended to ``EV`` (time, contact, before, after, rate,
+    force) from row ``n_ev``. Returns ``(status, k, n_ev, contact)``: status 0 = done; 1 = the
+    event buffer may overflow in the next step (grow it and call again from step ``k`` with
+    ``x``, ``s`` as left); 2 = more than ``max_events`` changes inside step ``k``, the last at
+    ``contact``. ``counts`` (int64, 3) accumulates the pieces summed, the pieces halved (a
+    state stiffer than ``h_max`` allows) and the gap polynomials searched for a root.
+
+    ``sched_t``, ``sched_e``, ``sched_k``: scheduled stiffness changes (time from step 0,
+    contact, new stiffness; sorted by time), from entry ``sched_pos[0]`` on (advanced in place,
+    as ``kc``): alternating mesh stiffness (:mod:`gearmodal.model.mesh_stiffness`). A piece
+    ends at the next scheduled time and the change is applied there exactly, to a closed
+    contact as a rank-one update (a time event: no state change, no log entry).
+
+    Turning geometry (:mod:`gearmodal.integrate.periodic`; empty arrays for a frozen system):
+    the input azimuth is ``psi0 + om t``; ``harm``, ``tcols``, ``ZK``, ``ZC``, ``tc_idx``,
+    ``TW``, ``TOFF``, ``TU`` as :class:`~gearmodal.integrate.periodic.Periodic` (the turning
+    contacts' rows are zero in ``W``, ``U`` and ``off``: their gaps come from their series) and
+    ``GT`` (H1, n, m) the turning harmonics of ``M^-1`` times the load columns of ``F``. Each
+    piece is then summed by (T2) of :func:`_coefficients_turning`.
+    """
+    N = x.shape[0]
+    n = N // 2
+    nc = W.shape[0]
+    # [M^-1 K_s, M^-1 C_s] and, for a turning system, the columns Z of the turning harmonics'
+    # rows (T2): Re/Im of ZK_h (h >= 1) on Re/Im of Y_h, then of ZC_h on Yd_h; one product
+    H1 = harm.shape[0]
+    nT = tcols.shape[0]
+    cturn = False  # a turning damping (constant over the run)
+    for hh in range(1, H1):
+        for i in krows:
+            for c in range(nT):
+                if ZC[hh, i, c] != 0.0:
+                    cturn = True
+    nz = 2 * nT * (H1 - 1) * (2 if cturn else 1) if H1 > 1 else 0
+    MKC = np.zeros((n, 2 * n + nz))
+    o = 2 * n
+    for hh in range(1, H1):
+        for i in krows:
+            for c in range(nT):
+                MKC[i, o + c] = ZK[hh, i, c].real
+                MKC[i, o + nT + c] = -ZK[hh, i, c].imag
+        o += 2 * nT
+    if cturn:
+        for hh in range(1, H1):
+            for i in krows:
+                for c in range(nT):
+                    MKC[i, o + c] = ZC[hh, i, c].real
+                    MKC[i, o + nT + c] = -ZC[hh, i, c].imag
+            o += 2 * nT
+    acc = np.empty(n)
+    n_terms = terms[terms.shape[0] - 1]
+    B = np.empty((n_terms, n))
+    q = x[:n].copy()
+    v = x[n:].copy()
+    qb = np.empty(n)
+    vb = np.empty(n)
+    ga = np.empty(nc)
+    ra = np.empty(nc)
+    gb = np.empty(nc)
+    rb = np.empty(nc)
+    coef = np.empty(n_terms)
+    work_flat = np.empty((DEPTH + 5) * n_terms)
+    stk = np.empty((2, DEPTH + 1))
+    ysc = np.empty(2 * n + nz)
+    roots = np.empty(nc)
+    order = np.empty(nc, dtype=np.int64)
+    order_est = np.empty(nc)
+    gF = np.empty(n)
+    gS = np.empty(n)
+    g0 = np.empty(n)
+    m = F.shape[1]
+    # turning geometry (empty for a frozen system)
+    nTC = tc_idx.shape[0]
+    turning = H1 > 1
+    E = np.zeros((H1, n_terms), dtype=np.complex128)
+    EL = np.full(H1, n_terms, dtype=np.int64)  # terms of E_h up to the first negligible one
+    Y = np.empty((2, H1, n_terms, nT))
+    Yd = np.empty((2, H1, n_terms, nT))
+    Bt = np.empty((n_terms, nT))
+    OFS = np.zeros((nTC, n_terms))
+    P = np.zeros((nTC, n_terms))
+    PD = np.zeros((nTC, n_terms))
+    FT = np.zeros((nTC, n_terms))
+    kt = np.empty(nTC)
+    ct = np.empty(nTC)
+    closed = np.empty(nTC, dtype=np.bool_)
+    loads = False  # a turning load over the current output step
+    VA = np.zeros((H1, n), dtype=np.complex128)
+    VS = np.zeros((H1, n), dtype=np.complex128)
+    GV = np.zeros((H1, n), dtype=np.complex128)
+    _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+    toggled = 0
+    dense = False
+    cap = EV.shape[0]
+    rho_all = tscale * reach / TERM_BINS  # the bound over every state
+    h_all = h_max
+    if per_state:
+        rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
+        h_max = min(reach / rs, dt) if rs > 0.0 else h_all
+        tscale = TERM_BINS * rs / reach
+    k = k0
+    ip = sched_pos[0]
+    n_sched = sched_t.shape[0]
+    while k < n_steps:
+        if n_ev + max_events + nc + 1 > cap:
+            x[:n] = q
+            x[n:] = v
+            sched_pos[0] = ip
+            return 1, k, n_ev, -1
+        tk = k * dt
+        t_end = tk + dt
+        # M^-1 F at the step start and its rate (first-order hold), once per step
+        for i in range(n):
+            a0 = 0.0
+            a1 = 0.0
+            for j in range(m):
+                a0 += MinvU[i, j] * F[k, j]
+                a1 += MinvU[i, j] * (F[k + 1, j] - F[k, j])
+            gF[i] = a0
+            gS[i] = a1 / dt
+        if turning:  # the turning load harmonics at the step start and their rates
+            loads = False
+            for hh in range(1, H1):
+                for i in range(n):
+                    z0 = 0j
+                    z1 = 0j
+                    for j in range(m):
+                        z0 += GT[hh, i, j] * F[k, j]
+                        z1 += GT[hh, i, j] * (F[k + 1, j] - F[k, j])
+                    VA[hh, i] = z0
+                    VS[hh, i] = z1 / dt
+                    if z0 != 0.0 or z1 != 0.0:
+                        loads = True
+        t = tk
+        count = 0
+        fresh = False  # ga, ra hold the gaps at (t, q, v) in state s
+        while True:
+            # scheduled stiffness changes due by now (time events)
+            while ip < n_sched and sched_t[ip] <= t + 1e-13 * dt:
+                e = sched_e[ip]
+                if s[e]:
+                    _toggle(U, W, kc, cc, off, e, -1.0, MKC, acc)
+                    kc[e] = sched_k[ip]
+                    _toggle(U, W, kc, cc, off, e, 1.0, MKC, acc)
+                    toggled += 2
+                else:
+                    kc[e] = sched_k[ip]
+                ip += 1
+            remaining = t_end - t
+            if remaining <= 1e-13 * dt:
+                break
+            # right after a quick succession of events the next one is likely near: a piece
+            # of a quarter of the reach needs fewer terms (ends of pieces cost nothing)
+            hm = 0.25 * h_max if dense else h_max
+            h = min(hm, remaining)
+            if h < remaining and remaining - h < 1e-3 * hm:
+                h = 0.5 * remaining  # no sliver before the output time
+            if ip < n_sched and sched_t[ip] < t + h:
+                h = sched_t[ip] - t  # the piece ends at the next time event
+            # as many terms as the piece's own reach rho h needs (a short piece before an
+            # output time or after an event needs fewer)
+            j = int(math.ceil(h * tscale))
+            nt = terms[min(max(j, 0), terms.shape[0] - 1)]
+            Bv = B[:nt]
+            # the root search's scratch, contiguous at this width (a column slice of a wider
+            # array would not vectorise)
+            work = work_flat[:(DEPTH + 5) * nt].reshape((DEPTH + 5, nt))
+            for i in range(n):
+                g0[i] = acc[i] + gF[i] + gS[i] * (t - tk)
+            if turning:
+                for e in range(nTC):
+                    kt[e] = kc[tc_idx[e]]
+                    ct[e] = cc[tc_idx[e]]
+                    closed[e] = s[tc_idx[e]]
+                for hh in range(H1):
+                    for i in range(n):
+                        GV[hh, i] = VA[hh, i] + VS[hh, i] * (t - tk)
+            counts[0] += 1
+            while True:
+                if turning:
+                    # the exponential series of the piece (P2) and the turning offsets
+                    psi = psi0 + om * t
+                    for hh in range(H1):
+                        z = 1j * harm[hh] * om * h
+                        E[hh, 0] = complex(math.cos(harm[hh] * psi), math.sin(harm[hh] * psi))
+                        EL[hh] = nt
+                        for jj in range(1, nt):
+                            if EL[hh] < nt:
+                                E[hh, jj] = 0j
+                                continue
+                            E[hh, jj] = E[hh, jj - 1] * z / jj
+                            # |E_j| <= |z|^j / j! below E_TINY (|z| < 1: the rest smaller):
+                            # the Cauchy products stop there (P3)
+                            if abs(E[hh, jj]) < E_TINY and abs(z) < 1.0:
+                                EL[hh] = jj + 1
+                    for e in range(nTC):
+                        for kk in range(nt):
+                            a = 0.0
+                            for hh in range(H1):
+                                a += (TOFF[hh, e] * E[hh, kk]).real
+                            OFS[e, kk] = a
+                    # (whole arrays, the first nt terms used: contiguous, no strided views)
+                    _coefficients_turning(MKC, g0, gS, q, v, h, Bv, ysc, E, EL, tcols, krows,
+                                          urows, ZK, ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed,
+                                          P, PD, FT, GV, VS, cturn, loads)
+                else:
+                    _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
+                _converged(Bv, TAIL)
+                if _converged(Bv, TAIL):
+                    break
+                counts[1] += 1
+                # a state stiffer than the bound: halve the piece (the series of h / 2)
+                h *= 0.5
+            _evaluate(Bv, 1.0, h, qb, vb)
+            if not fresh:
+                _gaps(wptr, widx, wval, off, s, q, v, ga, ra)
+            _gaps(wptr, widx, wval, off, s, qb, vb, gb, rb)
+            for e in range(nTC):  # turning contacts: their gaps' series
+                c_ = tc_idx[e]
+                sg = -1.0 if s[c_] else 1.0
+                if not fresh:
+                    ga[c_] = sg * P[e, 0]
+                    ra[c_] = sg * P[e, 1] / h
+                g1 = 0.0
+                d1 = 0.0
+                for kk in range(nt):
+                    g1 += P[e, kk]
+                    d1 += kk * P[e, kk]
+                gb[c_] = sg * g1
+                rb[c_] = sg * d1 / h
+            # contacts whose gap has crossed by the end first, the likeliest earliest crossing
+            # (linear estimate) first: a certain root gives an early bound, and the others are
+            # searched only up to it (often rejected at once); then those flagged as possible
+            # brief contacts, up to the bound
+            best = np.inf
+            n_cert = 0
+            for e in range(nc):
+                roots[e] = np.inf
+                if gb[e] > 0.0:
+                    est = ga[e] / (ga[e] - gb[e]) if ga[e] < 0.0 else 0.0
+                    jj = n_cert  # insertion by estimate (a handful of contacts)
+                    while jj > 0 and order_est[jj - 1] > est:
+                        order[jj] = order[jj - 1]
+                        order_est[jj] = order_est[jj - 1]
+                        jj -= 1
+                    order[jj] = e
+                    order_est[jj] = est
+                    n_cert += 1
+            # then every other contact: its gap polynomial is bounded on the piece below
+            # (the start value plus the positive coefficients) and searched where that bound
+            # does not exclude a crossing (rigorous whatever the piece's length)
+            n_order = n_cert
+            for e in range(nc):
+                if gb[e] <= 0.0:
+                    order[n_order] = e
+                    n_order += 1
+            for o in range(n_order):
+                e = order[o]
+                limit = min(best + simultaneous / h, 1.0)
+                sg = -1.0 if s[e] else 1.0
+                # the gap's series, scaled to [0, limit]: nonzero by nonzero of the gap row
+                # (independent sums over the terms; -5 % of the run against term by term)
+                for kk in range(nt):
+                    coef[kk] = 0.0
+                for jj in range(wptr[e], wptr[e + 1]):
+                    col = widx[jj]
+                    wv = wval[jj]
+                    for kk in range(nt):
+                        coef[kk] += wv * Bv[kk, col]
+                for et in range(nTC):  # a turning contact: its gap's series (offset in it)
+                    if tc_idx[et] == e:
+                        for kk in range(nt):
+                            coef[kk] = P[et, kk]
+                scale = sg
+                for kk in range(nt):
+                    coef[kk] *= scale
+                    scale *= limit
+                coef[0] -= sg * off[e]
+                if o >= n_cert and coef[0] < 0.0:
+                    ub = coef[0]
+                    for kk in range(1, nt):
+                        if coef[kk] > 0.0:
+                            ub += coef[kk]
+                    if ub <= 0.0:
+                        continue  # no crossing on [0, limit] (B1)
+                r = first_root(coef[:nt], work, stk)
+                counts[2] += 1
+                if r < np.inf:
+                    roots[e] = r * limit
+                    best = min(best, roots[e])
+            if best == np.inf:
+                t = t_end if h == remaining else t + h
+                if ip < n_sched and sched_t[ip] - t < 1e-13 * dt:
+                    t = max(t, sched_t[ip])  # exactly at the time event
+                for i in range(n):
+                    q[i] = qb[i]
+                    v[i] = vb[i]
+                for e in range(nc):
+                    ga[e] = gb[e]
+                    ra[e] = rb[e]
+                fresh = True
+                dense = False
+                continue
+            _evaluate(Bv, best, h, q, v)
+            fresh = False
+            dense = best * h < 0.25 * h_max
+            t = t + best * h
+            tol = simultaneous / h
+            last = -1
+            for e in range(nc):
+                if roots[e] <= best + tol:
+                    before = s[e]
+                    s[e] = not before
+                    p = -off[e]
+                    rr = 0.0
+                    for i in range(n):
+                        p += W[e, i] * q[i]
+                        rr += W[e, i] * v[i]
+                    wv = rr
+                    for et in range(nTC):  # a turning contact: its series at the event
+                        if tc_idx[et] == e:
+                            p, rr = _value_slope(P[et, :nt], best)
+                            rr /= h
+                            wv = _hpoly(PD[et, :nt], best) / h
+                    force = kc[e] * max(p, 0.0) + cc[e] * wv if s[e] else 0.0
+                    EV[n_ev, 0] = t
+                    EV[n_ev, 1] = e
+                    EV[n_ev, 2] = 1.0 if before else 0.0
+                    EV[n_ev, 3] = 1.0 if s[e] else 0.0
+                    EV[n_ev, 4] = rr
+                    EV[n_ev, 5] = force
+                    n_ev += 1
+                    count += 1
+                    last = e
+                    _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKC, acc)
+                    toggled += 1
+            if per_state:
+                rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
+                h_max = min(reach / rs, dt) if rs > 0.0 else h_all
+                tscale = TERM_BINS * rs / reach
+            if count > max_events:
+                x[:n] = q
+                x[n:] = v
+                sched_pos[0] = ip
+                return 2, k, n_ev, last
+            if toggled >= REFRESH:  # rounding of the updates, rebuilt from scratch
+                _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+                toggled = 0
+        if toggled >= REFRESH:
+            _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+            toggled = 0
+        k += 1
+        for i in range(n):
+            X[k, i] = q[i]
+            X[k, n + i] = v[i]
+        for e in range(nc):
+            S[k, e] = s[e]
+    x[:n] = q
+    x[n:] = v
+    sched_pos[0] = ip
+    return 0, k, n_ev, -1
+
+
+def spectral_bound_all(system, parts: bool = False):
+    """A bound of the spectral radius of ``A_s`` valid for every contact state ``s``, 1/s.
+
+    As :meth:`PiecewiseLinearSystem.spectral_bound` (``|lam| <= (c + sqrt(c^2 + 4 k)) / 2``
+    with ``k >= |L^-1 K_s L^-T|``, ``c >= |L^-1 C_s L^-T|``), with ``k`` and ``c`` bounded over
+    all states: for symmetric always-active matrices every state lies between the always-active
+    part plus all contacts of negative coefficient and plus all of positive coefficient (the
+    contacts add semidefinite terms of their coefficient's sign; negative ones are the shaping
+    ramps of a polygonal clearance), so its extreme eigenvalues lie between theirs; otherwise
+    the triangle inequality over the contacts. ``parts``: return the bounds ``(k, c)``."""
+    n = system.n
+    if n == 0:
+        return (0.0, 0.0) if parts else 0.0
+    Li = system.Linv
+    W = system.W
+    Wl = W @ Li.T  # rows L^-1 w_e
+    w2 = np.einsum("ij,ij->i", Wl, Wl)
+
+    def norm_bound(H0, per_contact):
+        """Bound of |L^-1 H_s L^-T| over every state (H0 always active)."""
+        if not np.any(H0) and np.all(per_contact >= 0.0):
+            # no always-active part (e.g. damping only at the contacts): every state lies
+            # between 0 and all contacts closed, one eigenproblem
+            hi = (Wl.T * per_contact) @ Wl
+            return float(max(np.linalg.eigvalsh(hi)[-1], 0.0))
+        A0 = Li @ H0 @ Li.T
+        if np.abs(H0 - H0.T).max(initial=0.0) <= 1e-12 * np.abs(H0).max(initial=1e-300):
+            # L^-1 (H0 + W^T D W) L^-T = A0 + Wl^T D Wl (D: the negative or positive part)
+            lo = A0 + (Wl.T * np.minimum(per_contact, 0.0)) @ Wl
+            hi = A0 + (Wl.T * np.maximum(per_contact, 0.0)) @ Wl
+            e_lo = np.linalg.eigvalsh(lo)  # (eigvalsh reads one triangle: symmetric enough)
+            e_hi = np.linalg.eigvalsh(hi)
+            return float(max(abs(e_lo[0]), abs(e_lo[-1]), abs(e_hi[0]), abs(e_hi[-1])))
+        return float(np.linalg.norm(A0, 2) + np.sum(np.abs(per_contact) * w2))
+
+    k = norm_bound(system.K0, getattr(system, "k_max", system.k))  # alternating meshes: max
+    c = norm_bound(system.C0, system.c)
+    if parts:
+        return k, c
+    return float(0.5 * (c + math.sqrt(c * c + 4.0 * k)))
+
+
+#: contacts above which the per-state bound is not kept (its key is a bit mask of the state)
+STATE_BOUND_CONTACTS = 62
+#: slots of the table of states met (a power of two; when full, bounds are not stored)
+STATE_TABLE = 1024
+
+
+class StateBound:
+    """Per-contact-state spectral bounds for :func:`taylor_run` (each state's pieces as long as
+    its own fastest mode allows, not the stiffest state's).
+
+    For a state ``s`` the bound is taken as for all states (:func:`spectral_bound_all`) but
+    with only ``s``'s contacts closed, at the azimuth 0 of the geometry, and times
+    ``kappa = rho_all / rho_all(0)``: the ratio of the run's bound over every state (with its
+    margins over the azimuth, the speed re-basing and the turning harmonics) to the same
+    all-states formula at azimuth 0. So ``rho_s <= rho_all`` always, and ``rho_s`` carries the
+    all-states margins. The kernel evaluates it once per state met (an eigenproblem of size
+    ``n``) and keeps it in a table by the state's bit mask; the series' tail check guards
+    each piece as before."""
+
+    def __init__(self, system, rho_all: float):
+        f = system.at(0.0) if system.turning else {"K0": system.K0, "C0": system.C0,
+                                                    "W": system.W}
+        Li = system.Linv
+        K = np.asarray(f["K0"], dtype=float)
+        self.enabled = (0 < len(system.k) <= STATE_BOUND_CONTACTS
+                        and np.abs(K - K.T).max(initial=0.0)
+                        <= 1e-12 * np.abs(K).max(initial=1e-300))
+        shim = types.SimpleNamespace(n=system.n, Linv=Li, W=f["W"], K0=K, C0=f["C0"],
+                                     k=system.k, c=system.c,
+                                     k_max=getattr(system, "k_max", system.k))
+        k_all, c0 = spectral_bound_all(shim, parts=True)
+        rho0 = 0.5 * (c0 + math.sqrt(c0 * c0 + 4.0 * k_all))
+        self.kappa = max(float(rho_all) / max(rho0, 1e-300), 1.0)
+        self.c0 = float(c0)
+        A = Li @ K @ Li.T
+        self.Ksym = np.ascontiguousarray(0.5 * (A + A.T))
+        self.Wl = np.ascontiguousarray(np.asarray(f["W"], dtype=float) @ Li.T)
+        self.km = np.ascontiguousarray(np.asarray(shim.k_max, dtype=float))
+        # an open-addressing table of the states met: keys (bit masks, -1 free), bounds
+        self.keys = np.full(STATE_TABLE, -1, dtype=np.int64)
+        self.vals = np.zeros(STATE_TABLE)
+
+    @property
+    def cache(self) -> dict:
+        """The states met so far: ``{bit mask: bound}``."""
+        used = self.keys >= 0
+        return dict(zip(self.keys[used].tolist(), self.vals[used].tolist(), strict=True))
+
+    def rescaled(self, factor: float) -> StateBound:
+        """This bound for a system that differs only in its speed terms (the turbine's
+        re-basing), with the margin ``factor`` (as the all-states bound is reused): the same
+        arrays, ``kappa`` and the cached states' bounds times ``factor``."""
+        out = object.__new__(StateBound)
+        out.__dict__.update(self.__dict__)
+        out.kappa = self.kappa * factor
+        out.keys = self.keys.copy()
+        out.vals = self.vals * factor
+        return out
+
+    def args(self) -> tuple:
+        """The kernel's arguments (a disabled bound: empty arrays, every state at rho_all)."""
+        if not self.enabled:
+            z = np.zeros((0, 0))
+            return (False, z, z, np.zeros(0), 0.0, 1.0, self.keys, self.vals)
+        return (True, self.Ksym, self.Wl, self.km, self.c0, self.kappa, self.keys, self.vals)
+
+
+@numba.njit(cache=True)
+def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, keys, vals):
+    """The bound of contact state ``s`` (:class:`StateBound`), from the table ``keys``,
+    ``vals`` (linear probing) or computed and stored there."""
+    key = np.int64(0)
+    for e in range(s.shape[0]):
+        if s[e]:
+            key |= np.int64(1) << np.int64(e)
+    cap = keys.shape[0]
+    slot = -1
+    i = (key * np.int64(0x9E3779B1)) & (cap - 1)
+    for _ in range(cap):
+        if keys[i] == key:
+            return vals[i]
+        if keys[i] < 0:
+            slot = i
+            break
+        i = (i + 1) & (cap - 1)
+    n = Ksym.shape[0]
+    H = Ksym.copy()
+    for e in range(s.shape[0]):
+        if s[e] and km[e] != 0.0:
+            ke = km[e]
+            for i in range(n):
+                wi = ke * Wl[e, i]
+                if wi != 0.0:
+                    for j in range(n):
+                        H[i, j] += wi * Wl[e, j]
+    lam = np.linalg.eigvalsh(H)
+    kk = max(abs(lam[0]), abs(lam[n - 1]))
+    r = min(rho_all, kappa * 0.5 * (c0 + math.sqrt(c0 * c0 + 4.0 * kk)))
+    if slot >= 0:
+        keys[slot] = key
+        vals[slot] = r
+    return r
+
+
+#: azimuths at which a turning system's spectral bound is taken (the largest, with a margin)
+BOUND_AZIMUTHS = 8
+
+
+def spectral_bound_turning(system) -> float:
+    """:func:`spectral_bound_all` of a turning system: the largest over ``BOUND_AZIMUTHS``
+    azimuths of a turn, with a margin of twice the spread between the samples plus 2 %, plus
+    the fastest turning harmonic ``H |Omega|`` (the geometry's own series, (P2) of
+    :mod:`gearmodal.integrate.periodic`). The bound is a smooth function of the azimuth (the
+    turning parts are bearings and supports, soft against the meshes: on the 600 kW
+    drivetrain it does not change in the 13th digit); between the samples the tail check of
+    every piece halves one the bound makes too long."""
+    vals = []
+    for j in range(BOUND_AZIMUTHS):
+        f = system.at(2.0 * math.pi * j / BOUND_AZIMUTHS)
+        shim = types.SimpleNamespace(n=system.n, Linv=system.Linv, W=f["W"], K0=f["K0"],
+                                     C0=f["C0"], k=system.k, c=system.c,
+                                     k_max=getattr(system, "k_max", system.k))
+        vals.append(spectral_bound_all(shim))
+    hi, lo = max(vals), min(vals)
+    top = float(np.max(system.periodic.harm)) * abs(system.omega)
+    return hi * (1.02 + 2.0 * (hi - lo) / max(hi, 1e-300)) + top
+
+
+class TaylorIntegrator:
+    """Per frozen system: the arrays of :func:`taylor_run` (built once, reused by callers that
+    advance one system in several calls)."""
+
+    def __init__(self, system, dt: float, max_events_per_step: int = 200,
+                 reach: float = REACH, n_terms: int | None = None):
+        self.sys = system
+        self.dt = float(dt)
+        self.max_events = int(max_events_per_step)
+        Minv = system.Minv
+        self.MK0 = np.ascontiguousarray(Minv @ system.K0)
+        self.MC0 = np.ascontiguousarray(Minv @ system.C0)
+        self.U = np.ascontiguousarray(system.W @ Minv.T)  # rows M^-1 w_e (Minv symmetric)
+        # the gap rows by their nonzeros (a mesh or bearing touches a few DOFs)
+        rows, cols = np.nonzero(system.W)  # row-major: each row's columns in order
+        self.wptr = np.zeros(system.W.shape[0] + 1, dtype=np.int64)
+        np.cumsum(np.bincount(rows, minlength=system.W.shape[0]), out=self.wptr[1:])
+        self.widx = cols.astype(np.int64)
+        self.wval = np.ascontiguousarray(system.W[rows, cols])
+        base = getattr(system, "rho_base", None)
+        if base:
+            # a system that differs from the one that computed ``base`` only in its speed
+            # terms (the turbine's re-basing): its bound with a margin, instead of ~1-3 ms of
+            # eigenvalues; the series' tail check still halves any piece it makes too long
+            self.rho = RHO_SPEED * float(base)
+            system.rho_bound = float(base)  # passed on as is: margins do not compound
+            sb = getattr(system, "state_bound_base", None)
+        else:
+            bound = spectral_bound_turning if system.turning else spectral_bound_all
+            self.rho = max(bound(system), 1e-300)
+            system.rho_bound = self.rho
+        self.reach = float(reach)
+        if base and sb is not None:
+            self.state_bound = sb.rescaled(RHO_SPEED)
+            system.state_bound = sb
+        else:
+            self.state_bound = StateBound(system, self.rho)
+            system.state_bound = self.state_bound
+        self.terms = np.array(_term_table(float(reach), int(n_terms or 0)), dtype=np.int64)
+        self.n_terms = int(self.terms[-1])  # the full count, last in the table
+        self.tscale = TERM_BINS * self.rho / reach
+        self.h_max = min(reach / self.rho, self.dt)
+        self.MinvU = np.ascontiguousarray(system.MinvU)
+        if system.turning:
+            pr, GT = system.periodic, system.GT
+            if GT.shape != (len(pr.harm),) + self.MinvU.shape:  # forces given as such
+                GT = np.zeros((len(pr.harm),) + self.MinvU.shape, dtype=complex)
+        else:
+            from .periodic import frozen
+
+            pr, GT = frozen()
+        self.turning = (pr.harm, pr.tcols, pr.krows, pr.urows, pr.ZK, pr.ZC, pr.tc_idx, pr.TW,
+                        pr.TOFF, pr.TU, np.ascontiguousarray(GT))
+
+    def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray,
+            azimuth0: float = 0.0):
+        """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`); the input
+        azimuth at the start is ``azimuth0`` (rad: alternating mesh stiffness, turning
+        geometry)."""
+        sysm = self.sys
+        kc = np.array(sysm.stiffness_at(azimuth0), dtype=float)  # changed in place by events
+        sched = sysm.schedule(azimuth0, n_steps * self.dt)
+        sched_pos = np.zeros(1, dtype=np.int64)
+        X = np.empty((n_steps + 1, 2 * sysm.n))
+        S = np.empty((n_steps + 1, sysm.n_contacts), dtype=bool)
+        X[0], S[0] = x0, s0
+        x = np.array(x0, dtype=float)
+        s = np.array(s0, dtype=bool)
+        EV = np.empty((max(64, 4 * (self.max_events + sysm.n_contacts + 1)), 6))
+        k, n_ev = 0, 0
+        counts = np.zeros(3, dtype=np.int64)
+        while True:
+            status, k, n_ev, contact = taylor_run(
+                self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
+                sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
+                self.terms, self.tscale, GRAZE_MARGIN,
+                SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts, *sched,
+                sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
+                *self.state_bound.args())
+            if status == 0:
+                break
+            if status == 1:
+                EV = np.concatenate([EV, np.empty_like(EV)])
+                continue
+            raise ModelError(
+                "max_events_per_step",
+                f"more than {self.max_events} contact-state changes inside one step "
+                f"ending near t = {(k + 1) * self.dt:.9g} s, last at contact "
+                f"{sysm.names[int(contact)]!r} (tooth chatter or a Zeno sequence); reduce dt, "
+                "add damping, or raise max_events_per_step")
+        events = EV[:n_ev].copy()  # rows (time, contact, before, after, rate, force)
+        self.counts = {"pieces": int(counts[0]), "halved": int(counts[1]),
+                       "root_searches": int(counts[2])}
+        return X, S, events
