@@ -185,3 +185,17 @@ def test_bem_solution_satisfies_its_equations():
                                             rot.hub_radius, rot.airfoil.alpha, rot.airfoil.cl,
                                             rot.airfoil.cd)
                     assert abs(a2 - a) < 1e-12 and abs(ap2 - ap) < 1e-12, (V, b, i)
+
+
+def test_polar_lookup_is_numpys_interpolation():
+    """The BEM's polar lookup (one search for lift and drag) is np.interp of each, held at the
+    grid's ends, at random angles, grid points and beyond the grid."""
+    from gearmodal.turbine.rotor import _polar
+
+    af = Airfoil.viterna()
+    rng = np.random.default_rng(4)
+    angles = np.concatenate([rng.uniform(-3.3, 3.3, 2000), af.alpha[::37], [-4.0, 4.0]])
+    for a in angles:
+        cl, cd = _polar(a, af.alpha, af.cl, af.cd)
+        assert cl == pytest.approx(np.interp(a, af.alpha, af.cl), rel=1e-14, abs=1e-15)
+        assert cd == pytest.approx(np.interp(a, af.alpha, af.cd), rel=1e-14, abs=1e-15)

@@ -132,13 +132,32 @@ class Rotor:
 
 
 @numba.njit(cache=True)
+def _polar(al, pa, pcl, pcd):
+    """``(cl, cd)`` at angle ``al`` on the polar grid ``pa`` (increasing): np.interp of both
+    with one search, held at the ends."""
+    n = pa.shape[0]
+    if al <= pa[0]:
+        return pcl[0], pcd[0]
+    if al >= pa[n - 1]:
+        return pcl[n - 1], pcd[n - 1]
+    lo, hi = 0, n - 1  # pa[lo] <= al < pa[hi]
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if pa[mid] <= al:
+            lo = mid
+        else:
+            hi = mid
+    w = (al - pa[lo]) / (pa[hi] - pa[lo])
+    return pcl[lo] + w * (pcl[hi] - pcl[lo]), pcd[lo] + w * (pcd[hi] - pcd[lo])
+
+
+@numba.njit(cache=True)
 def _inductions(phi, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
     """The inductions ``(a, a')`` that flow angle ``phi`` implies at an element (module
     docstring: Prandtl's losses, Glauert's correction, the same limits as the iteration)."""
     ac = 0.2
     al = (phi - theta + math.pi) % (2.0 * math.pi) - math.pi
-    cl = np.interp(al, pa, pcl)
-    cd = np.interp(al, pa, pcd)
+    cl, cd = _polar(al, pa, pcl, pcd)
     sp, cp = math.sin(phi), math.cos(phi)
     cn = cl * cp + cd * sp
     ct = cl * sp - cd * cp
@@ -253,8 +272,7 @@ def _bem(U, vt, omega, r, chord, theta, dr, B, R, rh, pa, pcl, pcd, a, ap, rho, 
             ut = omega * ri * (1.0 + api) - vt[b, i]
             phi = math.atan2(ux, ut)
             al = (phi - theta[i] + math.pi) % (2.0 * math.pi) - math.pi
-            cl = np.interp(al, pa, pcl)
-            cd = np.interp(al, pa, pcd)
+            cl, cd = _polar(al, pa, pcl, pcd)
             q = 0.5 * rho * (ux * ux + ut * ut) * chord[i] * dr[i]
             fn[b, i] = q * (cl * math.cos(phi) + cd * math.sin(phi))
             ft[b, i] = q * (cl * math.sin(phi) - cd * math.cos(phi))
