@@ -93,7 +93,8 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
     dc = sim.double_contact()
     # single episodes name their mesh ("stage1.ring_planet1"), simultaneous ones their stage
     # ("stage1 (several planets)", or "several planets" for a stage model)
-    single = dc[(dc.n_planets == 1) & (dc.mesh.map(sim.stage_of) == name)]
+    stage = dc.mesh.map({m: sim.stage_of(m) for m in dc.mesh.unique()})  # (a lookup per mesh)
+    single = dc[(dc.n_planets == 1) & (stage == name)]
     multi = dc[(dc.n_planets >= 2)
                & (dc.mesh == (f"{name} (several planets)" if name else "several planets"))]
     out["double_contact_time_s"] = _union_length(zip(single.start, single.end, strict=True))

@@ -99,10 +99,14 @@ def test_rear_force_of_an_overhung_rotor_by_statics():
 def test_turbulence_is_seeded_and_sampled():
     kw = dict(mean_speed=10.0, hub_height=40.0, turbulence_intensity=0.12, duration=20.0,
               dt=0.2, grid_points=4)
+    from gearmodal.turbine import wind as wind_mod
+
     a, b, c = Wind(seed=1, **kw), Wind(seed=1, **kw), Wind(seed=2, **kw)
     y, z = np.array([0.0, 10.0]), np.array([40.0, 50.0])
     va = np.array([a.velocity(t, y, z)[0] for t in np.arange(0, 20, 0.2)])
+    wind_mod._BOXES.clear()  # generated again, not read from the process's cache
     vb = np.array([b.velocity(t, y, z)[0] for t in np.arange(0, 20, 0.2)])
+    assert b._turbulence()[3] is not a._turbulence()[3]
     vc = np.array([c.velocity(t, y, z)[0] for t in np.arange(0, 20, 0.2)])
     np.testing.assert_array_equal(va, vb)
     assert np.abs(va - vc).max() > 0.1
@@ -133,9 +137,11 @@ def test_turbulence_box_is_pyconturbs_frequency_by_frequency(monkeypatch):
     assert wind_mod.coherence_chunk(nt, 48) == 51
     assert wind_mod.coherence_chunk(6001, 147) == 1  # 600 s at 0.1 s, 7 x 7: 520 MB
     fast = Wind(**kw)._turbulence()[3]
+    monkeypatch.setattr(wind_mod, "_BOXES", {})  # each box generated, none from the cache
     monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n: 1)
     slow = Wind(**kw)._turbulence()[3]
     np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-12 * np.abs(slow).max())
+    monkeypatch.setattr(wind_mod, "_BOXES", {})
     monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n: 16)
     assert np.abs(Wind(**kw)._turbulence()[3] - slow).max() > 1e-3 * np.abs(slow).max()
 
@@ -199,3 +205,23 @@ def test_polar_lookup_is_numpys_interpolation():
         cl, cd = _polar(a, af.alpha, af.cl, af.cd)
         assert cl == pytest.approx(np.interp(a, af.alpha, af.cl), rel=1e-14, abs=1e-15)
         assert cd == pytest.approx(np.interp(a, af.alpha, af.cd), rel=1e-14, abs=1e-15)
+
+
+def test_turbulence_boxes_are_kept_per_process_by_their_parameters():
+    """A wind with the same turbulence parameters reads the box generated before (read-only);
+    shear and tower do not enter the box, a new seed or intensity makes a new one."""
+    from gearmodal.turbine import wind as wind_mod
+
+    kw = dict(mean_speed=10.0, hub_height=40.0, turbulence_intensity=0.12, duration=8.0,
+              dt=0.2, grid_points=3, seed=11)
+    wind_mod._BOXES.clear()
+    first = Wind(**kw)._turbulence()[3]
+    assert not first.flags.writeable
+    assert Wind(**{**kw, "shear_exponent": 0.1, "tower_radius": 0.0})._turbulence()[3] is first
+    other = Wind(**{**kw, "seed": 12})._turbulence()[3]
+    assert other is not first and np.abs(other - first).max() > 0.1
+    assert Wind(**{**kw, "turbulence_intensity": 0.06})._turbulence()[3] is not first
+    for seed in range(20, 20 + wind_mod.BOX_CACHE + 1):  # the oldest is dropped
+        Wind(**{**kw, "seed": seed})._turbulence()
+    assert len(wind_mod._BOXES) == wind_mod.BOX_CACHE
+    assert Wind(**kw)._turbulence()[3] is not first

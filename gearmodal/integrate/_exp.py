@@ -43,13 +43,13 @@ from ..errors import ModelError
 from .kernels import GRAZE_MARGIN, SIMULTANEOUS, _bisect_up
 from .kernels import _poly as _hpoly
 
-#: rho * (piece length) at most this: every modal component turns by at most 4 rad per piece.
-#: The largest term of a mode's series, REACH^4 / 4! = 10.7 times its amplitude, bounds the
-#: cancellation (about one digit); 2 cost 3-16 % more gearbox time on the coupled turbine run,
-#: 6 gained nothing there (output steps cap the pieces) and cancels two digits
-REACH = 4.0
-#: terms of the series at REACH (``terms_for(REACH)``): REACH^N / N! = 8.5e-18
-N_TERMS = 33
+#: rho * (piece length) at most this: every modal component turns by at most 6 rad per piece.
+#: The largest term of a mode's series, REACH^6 / 6! = 65 times its amplitude, bounds the
+#: cancellation (under two digits). Pieces run through output times; on the coupled turbine
+#: run 4 cost 10-15 % more gearbox time and 8 saved 3-5 % for 6x the cancellation
+REACH = 6.0
+#: terms of the series at REACH (``terms_for(REACH)``): REACH^N / N! = 1.6e-17
+N_TERMS = 40
 #: stack size of the Bernstein subdivision, and its smallest interval (2^-DEPTH of a piece,
 #: below the resolution of a double in [0, 1])
 DEPTH = 60
@@ -282,6 +282,8 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows
         _frozen_term(MKC, B, y, k, h, den, g0, g1)
         if loads:
             for hh in range(1, H1):
+                if k > EL[hh]:
+                    continue  # E_h[k] = E_h[k - 1] = 0 (P3)
                 ek = E[hh, k] * h2 * den
                 ek1 = E[hh, k - 1] * (h2 * h * den) if k > 0 else 0j
                 for i in range(n):
@@ -554,6 +556,40 @@ def first_root(coef, work, stk):
     return np.inf
 
 
+#: force samples within this fraction of their size from the line through a stretch's first
+#: two are on it (the rounding of loads computed on a line, not a kink)
+LINE_TOL = 1e-12
+
+
+@numba.njit(cache=True)
+def _stretch(F, k, n_steps):
+    """The last output index ``k2`` (> k) such that the force samples ``F[k..k2]`` lie on the
+    line through ``F[k]`` and ``F[k + 1]`` (to ``LINE_TOL``): the first-order hold has no kink
+    before ``k2``, so the solution's series runs through the output times in between."""
+    m = F.shape[1]
+    k2 = k + 1
+    while k2 < n_steps:
+        j = k2 + 1
+        for c in range(m):
+            d = F[k + 1, c] - F[k, c]
+            line = F[k, c] + (j - k) * d
+            if abs(F[j, c] - line) > LINE_TOL * (abs(F[k, c]) + (j - k) * abs(d)):
+                return k2
+        k2 = j
+    return k2
+
+
+@numba.njit(cache=True)
+def _write(X, S, j, q, v, s):
+    """Output row ``j``: the state ``(q, v)`` and the contact state ``s``."""
+    n = q.shape[0]
+    for i in range(n):
+        X[j, i] = q[i]
+        X[j, n + i] = v[i]
+    for e in range(s.shape[0]):
+        S[j, e] = s[e]
+
+
 @numba.njit(cache=True)
 def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0, n_steps,
                dt, h_max,
@@ -630,6 +666,9 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     stk = np.empty((2, DEPTH + 1))
     ysc = np.empty(2 * n + nz)
     roots = np.empty(nc)
+    colsum = np.empty(n)
+    qo = np.empty(n)
+    vo = np.empty(n)
     order = np.empty(nc, dtype=np.int64)
     order_est = np.empty(nc)
     gF = np.empty(n)
@@ -663,7 +702,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     h_all = h_max
     if per_state:
         rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
-        h_max = min(reach / rs, dt) if rs > 0.0 else h_all
+        h_max = reach / rs if rs > 0.0 else h_all
         tscale = TERM_BINS * rs / reach
     k = k0
     ip = sched_pos[0]
@@ -674,9 +713,13 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             x[n:] = v
             sched_pos[0] = ip
             return 1, k, n_ev, -1
+        # the output steps from k on whose forces lie on one line: one stretch of pieces (the
+        # force has no kink inside it), outputs read off the pieces' series
+        k2 = _stretch(F, k, n_steps)
         tk = k * dt
-        t_end = tk + dt
-        # M^-1 F at the step start and its rate (first-order hold), once per step
+        t_end = k2 * dt
+        jn = k + 1  # the next output time to write
+        # M^-1 F at the stretch start and its rate (first-order hold), once per stretch
         for i in range(n):
             a0 = 0.0
             a1 = 0.0
@@ -713,6 +756,11 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 else:
                     kc[e] = sched_k[ip]
                 ip += 1
+            if jn < k2 and n_ev + 2 * (max_events + nc + 1) > cap:
+                # the event buffer runs low: the stretch ends at the next output time, where
+                # the caller can grow it (room for this step's events is left, by the 2)
+                k2 = jn
+                t_end = k2 * dt
             remaining = t_end - t
             if remaining <= 1e-13 * dt:
                 break
@@ -772,7 +820,6 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                                           P, PD, FT, GV, VS, cturn, loads)
                 else:
                     _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
-                _converged(Bv, TAIL)
                 if _converged(Bv, TAIL):
                     break
                 counts[1] += 1
@@ -821,10 +868,25 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 if gb[e] <= 0.0:
                     order[n_order] = e
                     n_order += 1
+            # each coordinate's series summed in magnitude (k >= 1): a contact's gap moves by at
+            # most sum_j |w_j| A_j over the piece, which clears most gaps without their series
+            for i in range(n):
+                colsum[i] = 0.0
+            for kk in range(1, nt):
+                for i in range(n):
+                    colsum[i] += abs(Bv[kk, i])
             for o in range(n_order):
                 e = order[o]
                 limit = min(best + simultaneous / h, 1.0)
                 sg = -1.0 if s[e] else 1.0
+                if o >= n_cert and wptr[e + 1] > wptr[e]:
+                    g0e = -off[e]
+                    move = 0.0
+                    for jj in range(wptr[e], wptr[e + 1]):
+                        g0e += wval[jj] * Bv[0, widx[jj]]
+                        move += abs(wval[jj]) * colsum[widx[jj]]
+                    if sg * g0e + move < 0.0:
+                        continue  # no crossing on the piece ((B1) a fortiori)
                 # the gap's series, scaled to [0, limit]: nonzero by nonzero of the gap row
                 # (independent sums over the terms; -5 % of the run against term by term)
                 for kk in range(nt):
@@ -851,14 +913,26 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     if ub <= 0.0:
                         continue  # no crossing on [0, limit] (B1)
                 r = first_root(coef[:nt], work, stk)
+                r = first_root(coef[:nt], work, stk)
                 counts[2] += 1
                 if r < np.inf:
                     roots[e] = r * limit
                     best = min(best, roots[e])
             if best == np.inf:
+                t_old = t
                 t = t_end if h == remaining else t + h
                 if ip < n_sched and sched_t[ip] - t < 1e-13 * dt:
                     t = max(t, sched_t[ip])  # exactly at the time event
+                # the output times this piece passed: from its series (its end: the end state)
+                while jn <= k2 and jn * dt < t - 1e-13 * dt:
+                    _evaluate(Bv, (jn * dt - t_old) / h, h, qo, vo)
+                    _write(X, S, jn, qo, vo, s)
+                    jn += 1
+                    count = 0
+                if jn <= k2 and jn * dt <= t + 1e-13 * dt:
+                    _write(X, S, jn, qb, vb, s)
+                    jn += 1
+                    count = 0
                 for i in range(n):
                     q[i] = qb[i]
                     v[i] = vb[i]
@@ -868,10 +942,16 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 fresh = True
                 dense = False
                 continue
+            t_ev = t + best * h
+            while jn <= k2 and jn * dt < t_ev - 1e-13 * dt:  # outputs before the event
+                _evaluate(Bv, (jn * dt - t) / h, h, qo, vo)
+                _write(X, S, jn, qo, vo, s)
+                jn += 1
+                count = 0
             _evaluate(Bv, best, h, q, v)
             fresh = False
             dense = best * h < 0.25 * h_max
-            t = t + best * h
+            t = t_ev
             tol = simultaneous / h
             last = -1
             for e in range(nc):
@@ -903,25 +983,28 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     toggled += 1
             if per_state:
                 rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
-                h_max = min(reach / rs, dt) if rs > 0.0 else h_all
+                h_max = reach / rs if rs > 0.0 else h_all
                 tscale = TERM_BINS * rs / reach
             if count > max_events:
                 x[:n] = q
                 x[n:] = v
                 sched_pos[0] = ip
-                return 2, k, n_ev, last
+                return 2, jn - 1, n_ev, last
             if toggled >= REFRESH:  # rounding of the updates, rebuilt from scratch
                 _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
                 toggled = 0
+            # an output time at the event: the state after it
+            while jn <= k2 and jn * dt <= t + 1e-13 * dt:
+                _write(X, S, jn, q, v, s)
+                jn += 1
+                count = 0
         if toggled >= REFRESH:
             _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
             toggled = 0
-        k += 1
-        for i in range(n):
-            X[k, i] = q[i]
-            X[k, n + i] = v[i]
-        for e in range(nc):
-            S[k, e] = s[e]
+        while jn <= k2:  # (none left: the last piece ends at the stretch's end)
+            _write(X, S, jn, q, v, s)
+            jn += 1
+        k = k2
     x[:n] = q
     x[n:] = v
     sched_pos[0] = ip
@@ -1139,7 +1222,7 @@ class TaylorIntegrator:
         self.terms = np.array(_term_table(float(reach), int(n_terms or 0)), dtype=np.int64)
         self.n_terms = int(self.terms[-1])  # the full count, last in the table
         self.tscale = TERM_BINS * self.rho / reach
-        self.h_max = min(reach / self.rho, self.dt)
+        self.h_max = reach / self.rho
         self.MinvU = np.ascontiguousarray(system.MinvU)
         if system.turning:
             pr, GT = system.periodic, system.GT

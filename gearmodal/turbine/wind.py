@@ -45,6 +45,12 @@ def coherence_chunk(nt: int, n_points: int) -> int:
     return n_f if n_f * n_points**2 * 8 <= COHERENCE_BYTES else 1
 
 
+#: turbulence boxes kept per process (by the wind's parameters; a 600 s box of 7 x 7 points
+#: is 7 MB)
+BOX_CACHE = 4
+_BOXES: dict = {}
+
+
 @dataclass
 class Wind:
     """A wind field.
@@ -118,37 +124,53 @@ class Wind:
 
     # -- turbulence box ------------------------------------------------------------------
     def _turbulence(self):
-        """(times, y, z, box[time, comp, iy, iz]) of the turbulent fluctuations."""
+        """(times, y, z, box[time, comp, iy, iz]) of the turbulent fluctuations (read-only;
+        the process keeps the last :data:`BOX_CACHE` boxes by their parameters, so that the
+        cases of a study on one seed generate it once per worker)."""
         if self._box is None:
-            ny = self.grid_points
-            y = np.linspace(-self.half_width, self.half_width, ny)
-            z = self.hub_height + np.linspace(-self.half_width, self.half_width, ny)
-            nt = int(np.ceil(self.duration / self.dt)) + 1
-            t = np.arange(nt) * self.dt
-            if not self.turbulent:
-                box = np.zeros((nt, 3, ny, ny))
-            elif self.model == "mann":
-                box = self._mann_box(nt, ny, float(y[1] - y[0]))
-            else:
-                try:
-                    from pyconturb import gen_spat_grid, gen_turb
-                    from pyconturb.sig_models import constant_sig
-                    from pyconturb.wind_profiles import constant_profile
-                except ImportError as err:  # pragma: no cover - environment
-                    raise ModelError("wind.turbulence_intensity", "turbulence needs PyConTurb: "
-                                     "pip install 'gearmodal[wind]'") from err
-                spat = gen_spat_grid(y, z)
-                sig = self.turbulence_intensity * self.mean_speed
-                df = gen_turb(spat, T=nt * self.dt, nt=nt, seed=int(self.seed),
-                              u_ref=self.mean_speed, z_ref=self.hub_height,
-                              wsp_func=constant_profile, sig_func=constant_sig,
-                              sig_vals=[sig, 0.8 * sig, 0.5 * sig], comps=[0, 1, 2],
-                              nf_chunk=coherence_chunk(nt, spat.shape[1]))
-                vals = df.to_numpy()[:nt]  # columns u_p0, v_p0, w_p0, u_p1, ...: y outer, z inner
-                box = vals.reshape(nt, ny, ny, 3).transpose(0, 3, 1, 2).copy()
-                box -= box.mean(axis=0, keepdims=True)  # the mean comes from the profile
-            self._box = (t, y, z, box)
+            key = tuple((k, v) for k, v in sorted(vars(self).items())
+                        if k not in ("_box", "shear_exponent", "tower_radius", "tower_distance"))
+            box = _BOXES.get(key)
+            if box is None:
+                box = self._generate()
+                for a in box:
+                    a.flags.writeable = False
+                _BOXES[key] = box
+                while len(_BOXES) > BOX_CACHE:
+                    _BOXES.pop(next(iter(_BOXES)))
+            self._box = box
         return self._box
+
+    def _generate(self):
+        """A new box: (times, y, z, box) as :meth:`_turbulence` returns it."""
+        ny = self.grid_points
+        y = np.linspace(-self.half_width, self.half_width, ny)
+        z = self.hub_height + np.linspace(-self.half_width, self.half_width, ny)
+        nt = int(np.ceil(self.duration / self.dt)) + 1
+        t = np.arange(nt) * self.dt
+        if not self.turbulent:
+            box = np.zeros((nt, 3, ny, ny))
+        elif self.model == "mann":
+            box = self._mann_box(nt, ny, float(y[1] - y[0]))
+        else:
+            try:
+                from pyconturb import gen_spat_grid, gen_turb
+                from pyconturb.sig_models import constant_sig
+                from pyconturb.wind_profiles import constant_profile
+            except ImportError as err:  # pragma: no cover - environment
+                raise ModelError("wind.turbulence_intensity", "turbulence needs PyConTurb: "
+                                 "pip install 'gearmodal[wind]'") from err
+            spat = gen_spat_grid(y, z)
+            sig = self.turbulence_intensity * self.mean_speed
+            df = gen_turb(spat, T=nt * self.dt, nt=nt, seed=int(self.seed),
+                          u_ref=self.mean_speed, z_ref=self.hub_height,
+                          wsp_func=constant_profile, sig_func=constant_sig,
+                          sig_vals=[sig, 0.8 * sig, 0.5 * sig], comps=[0, 1, 2],
+                          nf_chunk=coherence_chunk(nt, spat.shape[1]))
+            vals = df.to_numpy()[:nt]  # columns u_p0, v_p0, w_p0, u_p1, ...: y outer, z inner
+            box = vals.reshape(nt, ny, ny, 3).transpose(0, 3, 1, 2).copy()
+            box -= box.mean(axis=0, keepdims=True)  # the mean comes from the profile
+        return t, y, z, box
 
     def _mann_box(self, nt: int, ny: int, dy: float) -> np.ndarray:
         """The Mann box swept past the rotor, (nt, 3, ny, ny): x = U t along the wind."""
