@@ -246,8 +246,11 @@ def cmd_study(args) -> int:
             continue
         if key not in params:
             raise ModelError(flags[key], f"the {args.study} study does not take it")
-        if key in ("duration", "step_deg", "top_frequency_hz") and not value > 0:
+        if key in ("duration", "step_deg") and not value > 0:
             raise ModelError(flags[key], f"= {value!r}: must be > 0")
+        if key == "top_frequency_hz" and not value >= 0:
+            raise ModelError(flags[key], f"= {value!r}: a frequency > 0 Hz, or 0 for the "
+                             "full model")
         if key == "seeds" and value < 1:
             raise ModelError(flags[key], f"= {value!r}: must be an integer >= 1")
         kwargs[key] = value
@@ -332,8 +335,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "seeds and seconds (fatigue)")
     st.add_argument("--top-frequency", type=float, dest="top_frequency", metavar="HZ",
                     help="mass-scaling rung: the gearbox's modes above HZ slowed to it "
-                         "(turbine studies; default: the full model; 500: about 3x faster, its "
-                         "error in docs/guide/fidelity.md)")
+                         "(turbine studies; default 500, its error in docs/guide/fidelity.md; "
+                         "0: the full model, about 2x slower)")
     st.add_argument("--workers", type=int, help="parallel processes (default: CPU count)")
     st.add_argument("--studies", help="folder of the study scripts (default: the source "
                     "tree's studies/)")

@@ -23,6 +23,7 @@ from pathlib import Path
 import pandas as pd
 
 import gearmodal as gm
+from gearmodal.massscale import STUDY_TOP_FREQUENCY_HZ, study_rung
 from gearmodal.report import tooth_force_figure, write_study_report
 from gearmodal.studies import load_table
 from gearmodal.summary import SUMMARY_COLUMNS, summarize
@@ -145,15 +146,17 @@ def _verdicts(s: pd.DataFrame) -> list[str]:
 
 def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int = 1, gravity: bool = True,
         executor=None, progress: bool = True, max_workers: int | None = None,
-        top_frequency_hz: float | None = None) -> pd.DataFrame:
+        top_frequency_hz: float | None = STUDY_TOP_FREQUENCY_HZ) -> pd.DataFrame:
     """Run the three cases (stored in ``out/store``, resumable) and write the outputs;
-    ``gravity=False`` leaves out the gearbox bodies' weight; ``top_frequency_hz`` runs them
-    on the mass-scaling rung. ``seeds`` > 1: every case on each of the seeds ``seed,
-    seed + 1, ...`` (paired: the same turbulence for the three cases), runs.csv (one row per
-    run), summary.csv (means over the seeds), effects.csv (each effect as a ratio with its 95 %
-    interval over the seeds, gearmodal.paired) and the paper's claims judged on the
-    intervals."""
+    ``gravity=False`` leaves out the gearbox bodies' weight; ``top_frequency_hz``: the
+    mass-scaling rung the cases run on (default 500 Hz, :mod:`gearmodal.massscale`; its error
+    in benchmarks/RESULTS.md), ``None`` or 0 the full model. ``seeds`` > 1: every case on each
+    of the seeds ``seed, seed + 1, ...`` (paired: the same turbulence for the three cases),
+    runs.csv (one row per run), summary.csv (means over the seeds), effects.csv (each effect
+    as a ratio with its 95 % interval over the seeds, gearmodal.paired) and the paper's
+    claims judged on the intervals."""
     out = Path(out)
+    top_frequency_hz = study_rung(top_frequency_hz)
     if seeds > 1:
         return _run_seeds(out, duration, seed, seeds, gravity, executor, progress,
                           max_workers, top_frequency_hz)

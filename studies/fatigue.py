@@ -30,7 +30,8 @@ lifetime revolutions ``P_eq = (sum w N_run P_eq,run^p / sum w N_run)^(1/p)`` and
 
 The runs use the mass-scaling rung at 500 Hz by default (``top_frequency_hz``;
 gearmodal.massscale: 2.5-2.9x faster, the engineering quantities within 0.7 % of the full
-model on the 30 s double-contact runs, benchmarks/RESULTS.md); ``None`` runs the full model.
+model on the 30 s double-contact runs, benchmarks/RESULTS.md); ``None`` or 0 (``--top-frequency 0``)
+runs the full model.
 
 Run: ``gearmodal study fatigue --out runs/fatigue [--quick] [--seeds N]``. ``--quick``: three
 bins (6, 12, 18 m/s), one seed, 60 s runs. On gm.sweep: any executor, resumable from
@@ -53,6 +54,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from double_contact import BEARING_C, CLEARANCE, SCENE, planet_spin  # noqa: E402
 
 from gearmodal.fatigue import WOEHLER, drivetrain_fatigue  # noqa: E402
+from gearmodal.massscale import STUDY_TOP_FREQUENCY_HZ, study_rung  # noqa: E402
 from gearmodal.report import write_study_report  # noqa: E402
 from gearmodal.studies import load_table  # noqa: E402
 
@@ -170,7 +172,7 @@ def _figure(runs: pd.DataFrame, spec: pd.DataFrame):
 
 
 def run(out, *, quick: bool = False, seed: int = 1, seeds: int | None = None,
-        duration: float | None = None, top_frequency_hz: float | None = 500.0,
+        duration: float | None = None, top_frequency_hz: float | None = STUDY_TOP_FREQUENCY_HZ,
         wind_class: str = "II", turbulence_category: str = "B", executor=None,
         progress: bool = True, max_workers: int | None = None) -> pd.DataFrame:
     """Run the set (stored in ``out/store``, resumable) and write summary.csv (one row per
@@ -182,6 +184,7 @@ def run(out, *, quick: bool = False, seed: int = 1, seeds: int | None = None,
         raise gm.ModelError("turbulence_category",
                             f"= {turbulence_category!r}: one of {', '.join(I_REF)}")
     out = Path(out)
+    top_frequency_hz = study_rung(top_frequency_hz)
     speeds = [6.0, 12.0, 18.0] if quick else list(np.arange(V_IN, V_OUT + 1e-9, BIN))
     n_seeds = seeds if seeds is not None else (1 if quick else 2)
     duration = duration if duration is not None else (60.0 if quick else 600.0)

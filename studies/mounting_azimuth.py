@@ -22,6 +22,7 @@ import gearmodal as gm
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from double_contact import CLEARANCE, FATIGUE_COLUMNS, SCENE, metrics  # noqa: E402
 
+from gearmodal.massscale import STUDY_TOP_FREQUENCY_HZ, study_rung  # noqa: E402
 from gearmodal.report import write_study_report  # noqa: E402
 
 COLUMNS = ["azimuth_deg", "max_planet_bearing_force_N", "max_front_force_N",
@@ -47,13 +48,16 @@ def _scatter(summary: pd.DataFrame, seeds: int) -> str:
 
 def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int = 1, step_deg: float = 20.0,
         gravity: bool = True, executor=None, progress: bool = True,
-        max_workers: int | None = None, top_frequency_hz: float | None = None) -> pd.DataFrame:
+        max_workers: int | None = None,
+        top_frequency_hz: float | None = STUDY_TOP_FREQUENCY_HZ) -> pd.DataFrame:
     """Sweep the mounting azimuth, each with ``seeds`` turbulence seeds from ``seed`` on
     (stored in ``out/store``, resumable). Writes runs.csv (one row per run) and summary.csv
     (per azimuth: the mean over the seeds of each run's peak, and its standard deviation);
     returns the summary. ``gravity=False`` leaves out the gearbox bodies' weight;
-    ``top_frequency_hz`` runs on the mass-scaling rung (:mod:`gearmodal.massscale`)."""
+    ``top_frequency_hz``: the mass-scaling rung the runs use (default 500 Hz,
+    :mod:`gearmodal.massscale`), ``None`` or 0 the full model."""
     out = Path(out)
+    top_frequency_hz = study_rung(top_frequency_hz)
     az = np.arange(0.0, 120.0 + 1e-9, step_deg)
     grid = [(a, seed + k) for a in az for k in range(seeds)]
     cases = pd.DataFrame({"turbine.mounting_azimuth_deg": [a for a, _ in grid],
