@@ -719,16 +719,19 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
         tk = k * dt
         t_end = k2 * dt
         jn = k + 1  # the next output time to write
-        # M^-1 F at the stretch start and its rate (first-order hold), once per stretch
+        # M^-1 F at the stretch start and its rate (first-order hold), once per stretch: the
+        # rate from the stretch's ends, so that the force (and the solution) does not depend
+        # on the output step when the samples lie on one line
+        span = (k2 - k) * dt
         for i in range(n):
             a0 = 0.0
             a1 = 0.0
             for j in range(m):
                 a0 += MinvU[i, j] * F[k, j]
-                a1 += MinvU[i, j] * (F[k + 1, j] - F[k, j])
+                a1 += MinvU[i, j] * (F[k2, j] - F[k, j])
             gF[i] = a0
-            gS[i] = a1 / dt
-        if turning:  # the turning load harmonics at the step start and their rates
+            gS[i] = a1 / span
+        if turning:  # the turning load harmonics at the stretch start and their rates
             loads = False
             for hh in range(1, H1):
                 for i in range(n):
@@ -736,9 +739,9 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     z1 = 0j
                     for j in range(m):
                         z0 += GT[hh, i, j] * F[k, j]
-                        z1 += GT[hh, i, j] * (F[k + 1, j] - F[k, j])
+                        z1 += GT[hh, i, j] * (F[k2, j] - F[k, j])
                     VA[hh, i] = z0
-                    VS[hh, i] = z1 / dt
+                    VS[hh, i] = z1 / span
                     if z0 != 0.0 or z1 != 0.0:
                         loads = True
         t = tk
