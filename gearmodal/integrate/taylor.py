@@ -67,6 +67,10 @@ TAIL = 1e-15
 #: this ends it in the Cauchy products (P3): what is left is below 1e-20 of the piece's
 #: largest coefficient, far under the series' own truncation (``TAIL``)
 E_TINY = 2.0**-70
+#: event-free pieces a new contact state runs on the bound over every state before its own
+#: bound is computed (an eigenproblem of size n)
+LAZY = 2
+DENSE = 0.25
 #: resolution of the per-piece term count (fractions of the reach)
 TERM_BINS = 64
 #: numba fast-math flags of the small dense loops: reassociation (vectorised sums and maxima)
@@ -126,69 +130,54 @@ def _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc):
             _toggle(U, W, kc, cc, off, e, 1.0, MKC, acc)
 
 
-@numba.njit(cache=True, fastmath=True, inline="always")
-def _term(MKC, B, y, k, c2, c1):
-    """``B[k + 2] = [M^-1 K_s, M^-1 C_s, Z] [c2 B[k]; c1 B[k + 1]; y_Z]``: the frozen part of
-    (T1), plus the turning rows of (T2) when ``MKC`` has the columns ``Z`` of the turning
-    harmonics (``y[2 n:]`` set by the caller)."""
-    n = B.shape[1]
-    n2 = n - n % 2
-    w = MKC.shape[1]  # 2 n, or more with the turning columns (their y filled by the caller)
-    for j in range(n):
-        y[j] = B[k, j] * c2
-        y[n + j] = B[k + 1, j] * c1
-    # two rows at a time: two independent sums hide the latency of each (-12 %)
-    for i in range(0, n2, 2):
-        a0 = 0.0
-        a1 = 0.0
-        for j in range(w):
-            yj = y[j]
-            a0 += MKC[i, j] * yj
-            a1 += MKC[i + 1, j] * yj
-        B[k + 2, i] = a0
-        B[k + 2, i + 1] = a1
-    for i in range(n2, n):
-        a = 0.0
-        for j in range(w):
-            a += MKC[i, j] * y[j]
-        B[k + 2, i] = a
-
-
-@numba.njit(cache=True, fastmath=True, inline="always")
-def _frozen_term(MKC, B, y, k, h, den, g0, g1):
-    """Row ``k + 2`` of (T1): the frozen product and the forcing terms ``g0``, ``g1`` (the
-    force at the piece's start and its rate enter rows 2 and 3 only)."""
-    n = B.shape[1]
-    h2 = h * h
-    _term(MKC, B, y, k, -h2 * den, -(k + 1.0) * h * den)
-    if k == 0:
-        for i in range(n):
-            B[2, i] += g0[i] * h2 * den
-    elif k == 1:
-        for i in range(n):
-            B[3, i] += g1[i] * h2 * h * den
-
-
 @numba.njit(cache=True, fastmath=True)
-def _coefficients(MKC, g0, g1, q, v, h, B, y):
-    """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions by (T1) with the forcing terms
-    ``g0``, ``g1``; ``MKC`` is ``[M^-1 K_s, M^-1 C_s]`` side by side (one contiguous product
-    per term); ``y`` is scratch of length 2 n (no allocation in the hot loop)."""
+def _coefficients_frozen(MKC, g0, g1, q, v, h, B, y):
+    """:func:`_coefficients` of a system that does not turn (no harmonics): (T1) alone."""
     n_terms, n = B.shape
+    n2 = n - n % 2
+    width = MKC.shape[1]
+    h2 = h * h
     for i in range(n):
         B[0, i] = q[i]
         B[1, i] = v[i] * h
     for k in range(n_terms - 2):
         den = 1.0 / ((k + 1.0) * (k + 2.0))
-        _frozen_term(MKC, B, y, k, h, den, g0, g1)
+        c2 = -h2 * den
+        c1 = -(k + 1.0) * h * den
+        for j in range(n):
+            y[j] = B[k, j] * c2
+            y[n + j] = B[k + 1, j] * c1
+        for i in range(0, n2, 2):
+            a0 = 0.0
+            a1 = 0.0
+            for j in range(width):
+                yj = y[j]
+                a0 += MKC[i, j] * yj
+                a1 += MKC[i + 1, j] * yj
+            B[k + 2, i] = a0
+            B[k + 2, i + 1] = a1
+        for i in range(n2, n):
+            a = 0.0
+            for j in range(width):
+                a += MKC[i, j] * y[j]
+            B[k + 2, i] = a
+        if k == 0:
+            for i in range(n):
+                B[2, i] += g0[i] * h2 * den
+        elif k == 1:
+            for i in range(n):
+                B[3, i] += g1[i] * h2 * h * den
 
 
 @numba.njit(cache=True, fastmath=True)
-def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC, Y,
-                          Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads):
-    """:func:`_coefficients` of the time-varying system (T2): the frozen part as (T1), plus
-    the turning harmonics of :mod:`gearmodal.integrate.periodic` by Cauchy products with the
-    piece's exponential series ``E`` (H1, n_terms) ((P2), ``E[0]`` the constant 1):
+def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC, Y, Yd, Bt,
+                  TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads):
+    """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions: the frozen part by (T1) with
+    the forcing terms ``g0`` (the force at the piece's start) and ``g1`` (its rate), one
+    contiguous product per term with ``MKC = [M^-1 K_s, M^-1 C_s, Z]`` (``y``: scratch of its
+    width), plus, for a system that turns, the turning harmonics of
+    :mod:`gearmodal.integrate.periodic` by Cauchy products with the piece's exponential series
+    ``E`` (H1, n_terms) ((P2), ``E[0]`` the constant 1):
 
         Y_h[k] = sum_j E_h[j] b_(k-j),   Yd_h[k] = sum_j E_h[j] (k - j + 1) b_(k-j+1)
         b_(k+2) += h^2 den (-Re sum_h ZK_h Y_h[k] - Re sum_h ZC_h Yd_h[k] / h
@@ -203,6 +192,8 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows
     real and imaginary parts in their first axis (2, H1, n_terms, nT) and ``Bt`` (n_terms, nT)
     the turning coordinates' rows of ``B``: real, contiguous sums that vectorise."""
     n_terms, n = B.shape
+    n2 = n - n % 2
+    width = MKC.shape[1]  # 2 n, or more with the turning columns
     H1 = E.shape[0]
     nT = tcols.shape[0]
     nTC = TW.shape[1]
@@ -279,7 +270,35 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows
                     y[o + c] = cd * Yd[0, hh, k, c]
                     y[o + nT + c] = cd * Yd[1, hh, k, c]
                 o += 2 * nT
-        _frozen_term(MKC, B, y, k, h, den, g0, g1)
+        # the frozen part of (T1): B[k + 2] = MKC [c2 B[k]; c1 B[k + 1]; y_Z], written out
+        # here (a helper, inlined or called, takes and drops an atomic reference count on
+        # each of its arrays per term: 12 % of an event-dense run)
+        c2 = -h2 * den
+        c1 = -(k + 1.0) * h * den
+        for j in range(n):
+            y[j] = B[k, j] * c2
+            y[n + j] = B[k + 1, j] * c1
+        # two rows at a time: two independent sums hide the latency of each (-12 %)
+        for i in range(0, n2, 2):
+            a0 = 0.0
+            a1 = 0.0
+            for j in range(width):
+                yj = y[j]
+                a0 += MKC[i, j] * yj
+                a1 += MKC[i + 1, j] * yj
+            B[k + 2, i] = a0
+            B[k + 2, i + 1] = a1
+        for i in range(n2, n):
+            a = 0.0
+            for j in range(width):
+                a += MKC[i, j] * y[j]
+            B[k + 2, i] = a
+        if k == 0:
+            for i in range(n):
+                B[2, i] += g0[i] * h2 * den
+        elif k == 1:
+            for i in range(n):
+                B[3, i] += g1[i] * h2 * h * den
         if loads:
             for hh in range(1, H1):
                 if k > EL[hh]:
@@ -300,7 +319,7 @@ def _coefficients_turning(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows
                     B[k + 2, i] -= (TU[hh, e, i] * fe).real
 
 
-@numba.njit(cache=True, fastmath=FAST)
+@numba.njit(cache=True, fastmath=FAST, inline="always")
 def _converged(B, tail):
     n_terms, n = B.shape
     big = 0.0
@@ -320,7 +339,7 @@ def _converged(B, tail):
     return last <= tail * big
 
 
-@numba.njit(cache=True, fastmath=FAST)
+@numba.njit(cache=True, fastmath=FAST, inline="always")
 def _evaluate(B, tau, h, q, v):
     """Positions and velocities at ``tau`` (0..1 of the piece) from the scaled rows (Horner,
     term by term over all coordinates: contiguous rows that vectorise)."""
@@ -338,7 +357,7 @@ def _evaluate(B, tau, h, q, v):
         v[i] = v[i] / h
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _gaps(wptr, widx, wval, off, s, q, v, g, r):
     """Signed gaps (> 0: the contact must switch) and their rates (``W`` by sparse rows)."""
     nc = off.shape[0]
@@ -391,30 +410,34 @@ def _bernstein(c, b):
             b[i] += b[i - 1]
 
 
-@numba.njit(cache=True)
-def _split(b, left, right, w):
-    """de Casteljau at 1/2: Bernstein coefficients of the two halves (``w``: scratch)."""
-    d = b.shape[0] - 1
-    w[:] = b
-    left[0] = w[0]
-    right[d] = w[d]
+@numba.njit(cache=True, inline="always")
+def _split_rows(work, top, rw):
+    """de Casteljau at 1/2 of the Bernstein coefficients in row ``top`` of ``work``: the right
+    half's into row ``top``, the left half's into row ``top + 1`` (row ``rw``: scratch). By
+    index, not by row views: each view takes and drops an atomic reference count (with the
+    other views of the search, 14 % of the planetary stage's event-dense run)."""
+    d = work.shape[1] - 1
+    for i in range(d + 1):
+        work[rw, i] = work[top, i]
+    work[top + 1, 0] = work[rw, 0]
+    work[top, d] = work[rw, d]
     for r in range(1, d + 1):
         for i in range(d - r + 1):
-            w[i] = 0.5 * (w[i] + w[i + 1])
-        left[r] = w[0]
-        right[d - r] = w[d - r]
+            work[rw, i] = 0.5 * (work[rw, i] + work[rw, i + 1])
+        work[top + 1, r] = work[rw, 0]
+        work[top, d - r] = work[rw, d - r]
 
 
-@numba.njit(cache=True, fastmath=FAST)
-def _max(b):
-    """Largest entry (a vectorised maximum)."""
-    mx = b[0]
-    for i in range(1, b.shape[0]):
-        mx = max(mx, b[i])
+@numba.njit(cache=True, fastmath=FAST, inline="always")
+def _row_max(work, r):
+    """Largest entry of row ``r`` (a vectorised maximum)."""
+    mx = work[r, 0]
+    for i in range(1, work.shape[1]):
+        mx = max(mx, work[r, i])
     return mx
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _value_slope(coef, t):
     """``g(t)`` and ``g'(t)`` by one Horner pass (two independent chains: about the latency
     of one)."""
@@ -492,9 +515,6 @@ def first_root(coef, work, stk):
         if ub <= 0.0:
             return np.inf
     depth_max = work.shape[0] - 5
-    c = work[depth_max + 1]
-    left = work[depth_max + 2]
-    right = work[depth_max + 3]
     poly = coef
     if big > 1e300:
         # the basis change and Horner's sums reach (d + 1) max |c_k|: scaled by a power of two
@@ -505,6 +525,7 @@ def first_root(coef, work, stk):
         for k in range(d + 1):
             poly[k] = coef[k] * f
     if g0 >= 0.0:
+        c = work[depth_max + 1]
         c[:] = poly
         c[0] = 0.0
         for k in range(1, d + 1):
@@ -521,20 +542,21 @@ def first_root(coef, work, stk):
     while top > 0:
         top -= 1
         a = stk[0, top]
-        b = work[top]  # (read by _split before its row is overwritten)
         w = stk[1, top]
-        if _max(b) <= 0.0:
+        # (the interval's Bernstein coefficients are row ``top``, read by index: no views)
+        if _row_max(work, top) <= 0.0:
             continue  # the usual outcome for a flagged near miss: no crossing, no split
-        if b[0] > 0.0:
+        if work[top, 0] > 0.0:
             return a  # the left neighbours hold no crossing
         changes = 0
-        prev = b[0]
+        prev = work[top, 0]
         for i in range(1, d + 1):
-            if b[i] != 0.0:
-                if prev != 0.0 and (b[i] > 0.0) != (prev > 0.0):
+            bi = work[top, i]
+            if bi != 0.0:
+                if prev != 0.0 and (bi > 0.0) != (prev > 0.0):
                     changes += 1
-                prev = b[i]
-        if changes == 1 and b[d] > 0.0:
+                prev = bi
+        if changes == 1 and work[top, d] > 0.0:
             hi = a + w
             ghi = _hpoly(poly, hi)
             if ghi > 0.0:
@@ -542,14 +564,12 @@ def first_root(coef, work, stk):
         if top + 2 > depth_max or w < MIN_WIDTH:
             # below the resolution of time (or out of stack): a crossing at the right end if
             # the polynomial ends positive there, else none in this interval
-            if b[d] > 0.0:
+            if work[top, d] > 0.0:
                 return a + w
             continue
-        _split(b, left, right, c)
-        work[top, :] = right
+        _split_rows(work, top, depth_max + 1)  # right half in row top, left in top + 1
         stk[0, top] = a + 0.5 * w
         stk[1, top] = 0.5 * w
-        work[top + 1, :] = left
         stk[0, top + 1] = a
         stk[1, top + 1] = 0.5 * w
         top += 2
@@ -579,7 +599,7 @@ def _stretch(F, k, n_steps):
     return k2
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _write(X, S, j, q, v, s):
     """Output row ``j``: the state ``(q, v)`` and the contact state ``s``."""
     n = q.shape[0]
@@ -605,8 +625,9 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     force) from row ``n_ev``. Returns ``(status, k, n_ev, contact)``: status 0 = done; 1 = the
     event buffer may overflow in the next step (grow it and call again from step ``k`` with
     ``x``, ``s`` as left); 2 = more than ``max_events`` changes inside step ``k``, the last at
-    ``contact``. ``counts`` (int64, 3) accumulates the pieces summed, the pieces halved (a
-    state stiffer than ``h_max`` allows) and the gap polynomials searched for a root.
+    ``contact``. ``counts`` (int64, 4) accumulates the pieces summed, the pieces halved (a
+    state stiffer than ``h_max`` allows), the gap polynomials searched for a root and the
+    Taylor rows computed (the series' terms summed over the pieces).
 
     ``sched_t``, ``sched_e``, ``sched_k``: scheduled stiffness changes (time from step 0,
     contact, new stiffness; sorted by time), from entry ``sched_pos[0]`` on (advanced in place,
@@ -619,7 +640,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     ``TW``, ``TOFF``, ``TU`` as :class:`~gearmodal.integrate.periodic.Periodic` (the turning
     contacts' rows are zero in ``W``, ``U`` and ``off``: their gaps come from their series) and
     ``GT`` (H1, n, m) the turning harmonics of ``M^-1`` times the load columns of ``F``. Each
-    piece is then summed by (T2) of :func:`_coefficients_turning`.
+    piece is then summed by (T2) of :func:`_coefficients`.
     """
     N = x.shape[0]
     n = N // 2
@@ -700,6 +721,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     cap = EV.shape[0]
     rho_all = tscale * reach / TERM_BINS  # the bound over every state
     h_all = h_max
+    pending = False
+    survived = 0
     if per_state:
         rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
         h_max = reach / rs if rs > 0.0 else h_all
@@ -769,7 +792,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 break
             # right after a quick succession of events the next one is likely near: a piece
             # of a quarter of the reach needs fewer terms (ends of pieces cost nothing)
-            hm = 0.25 * h_max if dense else h_max
+            hm = DENSE * h_max if dense else h_max
             h = min(hm, remaining)
             if h < remaining and remaining - h < 1e-3 * hm:
                 h = 0.5 * remaining  # no sliver before the output time
@@ -795,6 +818,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                         GV[hh, i] = VA[hh, i] + VS[hh, i] * (t - tk)
             counts[0] += 1
             while True:
+                counts[3] += nt
                 if turning:
                     # the exponential series of the piece (P2) and the turning offsets
                     psi = psi0 + om * t
@@ -817,12 +841,14 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                             for hh in range(H1):
                                 a += (TOFF[hh, e] * E[hh, kk]).real
                             OFS[e, kk] = a
-                    # (whole arrays, the first nt terms used: contiguous, no strided views)
-                    _coefficients_turning(MKC, g0, gS, q, v, h, Bv, ysc, E, EL, tcols, krows,
-                                          urows, ZK, ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed,
-                                          P, PD, FT, GV, VS, cturn, loads)
+                # (whole arrays, the first nt terms used: contiguous, no strided views; a
+                # system that does not turn has no harmonics, its loops are empty)
+                if turning:
+                    _coefficients(MKC, g0, gS, q, v, h, Bv, ysc, E, EL, tcols, krows, urows, ZK,
+                                  ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, VS,
+                                  cturn, loads)
                 else:
-                    _coefficients(MKC, g0, gS, q, v, h, Bv, ysc)
+                    _coefficients_frozen(MKC, g0, gS, q, v, h, Bv, ysc)
                 if _converged(Bv, TAIL):
                     break
                 counts[1] += 1
@@ -943,6 +969,12 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     ra[e] = rb[e]
                 fresh = True
                 dense = False
+                survived += 1
+                if pending and survived >= LAZY:  # a lasting state: its own bound from now on
+                    rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
+                    h_max = reach / rs if rs > 0.0 else h_all
+                    tscale = TERM_BINS * rs / reach
+                    pending = False
                 continue
             t_ev = t + best * h
             while jn <= k2 and jn * dt < t_ev - 1e-13 * dt:  # outputs before the event
@@ -952,7 +984,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 count = 0
             _evaluate(Bv, best, h, q, v)
             fresh = False
-            dense = best * h < 0.25 * h_max
+            dense = best * h < DENSE * h_max
             t = t_ev
             tol = simultaneous / h
             last = -1
@@ -984,7 +1016,16 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKC, acc)
                     toggled += 1
             if per_state:
-                rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
+                # a state met before: its bound from the table; a new one runs on the bound
+                # over every state until one of its pieces ends without an event (most states
+                # of a rattle or a double-contact transient live shorter than a piece: their
+                # eigenproblem would cost more than the longer pieces save)
+                rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals,
+                                False)
+                pending = rs < 0.0
+                survived = 0
+                if pending:
+                    rs = rho_all
                 h_max = reach / rs if rs > 0.0 else h_all
                 tscale = TERM_BINS * rs / reach
             if count > max_events:
@@ -1074,7 +1115,9 @@ class StateBound:
     ``n``) and keeps it in a table by the state's bit mask; the series' tail check guards
     each piece as before."""
 
-    def __init__(self, system, rho_all: float):
+    def __init__(self, system, rho_all: float, parts: tuple | None = None):
+        """``parts``: ``spectral_bound_all(system, parts=True)`` when already computed (a
+        system that does not turn)."""
         f = system.at(0.0) if system.turning else {"K0": system.K0, "C0": system.C0,
                                                     "W": system.W}
         Li = system.Linv
@@ -1085,7 +1128,9 @@ class StateBound:
         shim = types.SimpleNamespace(n=system.n, Linv=Li, W=f["W"], K0=K, C0=f["C0"],
                                      k=system.k, c=system.c,
                                      k_max=getattr(system, "k_max", system.k))
-        k_all, c0 = spectral_bound_all(shim, parts=True)
+        if parts is None or system.turning:
+            parts = spectral_bound_all(shim, parts=True)
+        k_all, c0 = parts
         rho0 = 0.5 * (c0 + math.sqrt(c0 * c0 + 4.0 * k_all))
         self.kappa = max(float(rho_all) / max(rho0, 1e-300), 1.0)
         self.c0 = float(c0)
@@ -1123,9 +1168,10 @@ class StateBound:
 
 
 @numba.njit(cache=True)
-def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, keys, vals):
+def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, keys, vals, compute=True):
     """The bound of contact state ``s`` (:class:`StateBound`), from the table ``keys``,
-    ``vals`` (linear probing) or computed and stored there."""
+    ``vals`` (linear probing) or computed and stored there; with ``compute`` false, -1 when
+    the state is not in the table yet."""
     key = np.int64(0)
     for e in range(s.shape[0]):
         if s[e]:
@@ -1140,6 +1186,8 @@ def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, keys, vals):
             slot = i
             break
         i = (i + 1) & (cap - 1)
+    if not compute:
+        return -1.0
     n = Ksym.shape[0]
     H = Ksym.copy()
     for e in range(s.shape[0]):
@@ -1203,6 +1251,7 @@ class TaylorIntegrator:
         self.widx = cols.astype(np.int64)
         self.wval = np.ascontiguousarray(system.W[rows, cols])
         base = getattr(system, "rho_base", None)
+        parts = None
         if base:
             # a system that differs from the one that computed ``base`` only in its speed
             # terms (the turbine's re-basing): its bound with a margin, instead of ~1-3 ms of
@@ -1210,16 +1259,19 @@ class TaylorIntegrator:
             self.rho = RHO_SPEED * float(base)
             system.rho_bound = float(base)  # passed on as is: margins do not compound
             sb = getattr(system, "state_bound_base", None)
+        elif system.turning:
+            self.rho = max(spectral_bound_turning(system), 1e-300)
+            system.rho_bound = self.rho
         else:
-            bound = spectral_bound_turning if system.turning else spectral_bound_all
-            self.rho = max(bound(system), 1e-300)
+            parts = spectral_bound_all(system, parts=True)  # shared with the state bound
+            self.rho = max(0.5 * (parts[1] + math.sqrt(parts[1] ** 2 + 4.0 * parts[0])), 1e-300)
             system.rho_bound = self.rho
         self.reach = float(reach)
         if base and sb is not None:
             self.state_bound = sb.rescaled(RHO_SPEED)
             system.state_bound = sb
         else:
-            self.state_bound = StateBound(system, self.rho)
+            self.state_bound = StateBound(system, self.rho, parts)
             system.state_bound = self.state_bound
         self.terms = np.array(_term_table(float(reach), int(n_terms or 0)), dtype=np.int64)
         self.n_terms = int(self.terms[-1])  # the full count, last in the table
@@ -1253,7 +1305,7 @@ class TaylorIntegrator:
         s = np.array(s0, dtype=bool)
         EV = np.empty((max(64, 4 * (self.max_events + sysm.n_contacts + 1)), 6))
         k, n_ev = 0, 0
-        counts = np.zeros(3, dtype=np.int64)
+        counts = np.zeros(4, dtype=np.int64)
         while True:
             status, k, n_ev, contact = taylor_run(
                 self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
@@ -1275,5 +1327,5 @@ class TaylorIntegrator:
                 "add damping, or raise max_events_per_step")
         events = EV[:n_ev].copy()  # rows (time, contact, before, after, rate, force)
         self.counts = {"pieces": int(counts[0]), "halved": int(counts[1]),
-                       "root_searches": int(counts[2])}
+                       "root_searches": int(counts[2]), "taylor_rows": int(counts[3])}
         return X, S, events
