@@ -319,7 +319,7 @@ def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC
                     B[k + 2, i] -= (TU[hh, e, i] * fe).real
 
 
-@numba.njit(cache=True, fastmath=FAST, inline="always")
+@numba.njit(cache=True, fastmath=FAST)
 def _converged(B, tail):
     n_terms, n = B.shape
     big = 0.0
@@ -339,7 +339,7 @@ def _converged(B, tail):
     return last <= tail * big
 
 
-@numba.njit(cache=True, fastmath=FAST, inline="always")
+@numba.njit(cache=True, fastmath=FAST)
 def _evaluate(B, tau, h, q, v):
     """Positions and velocities at ``tau`` (0..1 of the piece) from the scaled rows (Horner,
     term by term over all coordinates: contiguous rows that vectorise)."""
@@ -428,7 +428,7 @@ def _split_rows(work, top, rw):
         work[top, d - r] = work[rw, d - r]
 
 
-@numba.njit(cache=True, fastmath=FAST, inline="always")
+@numba.njit(cache=True, fastmath=FAST)
 def _row_max(work, r):
     """Largest entry of row ``r`` (a vectorised maximum)."""
     mx = work[r, 0]
