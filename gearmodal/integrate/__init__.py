@@ -13,9 +13,9 @@ behind it (:mod:`.driver`):
 
 from __future__ import annotations
 
+import functools
 import math
 import time
-import weakref
 
 import numpy as np
 import pandas as pd
@@ -302,33 +302,13 @@ def build_result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings) -> S
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
     tables = _Tables(seg_systems, t, X, S, event_array([events]), mesh_k)
     return SimulationResult(t=t, settings=settings, initial_state=init, stats=stats,
-                            tables=tables, elements=elements_table(system.asm))
-
-
-#: the element tables of the assemblies run (by ``id``, with a weak reference that both
-#: checks the identity and drops the entry when the assembly is gone): ~0.5 ms of pandas per
-#: run otherwise, a quarter of a short transient's cost
-_ELEMENT_TABLES: dict[int, tuple] = {}
+                            tables=tables,
+                            elements=functools.partial(elements_table, system.asm))
 
 
 def elements_table(asm: Assembly) -> pd.DataFrame:
     """One row per element with contact, spring or round-clearance rows (index ``element``):
-    ``kind``, ``stage``, ``role``, ``planet`` (:attr:`SimulationResult.elements`); a copy of
-    the table built at the assembly's first run."""
-    key = id(asm)
-    hit = _ELEMENT_TABLES.get(key)
-    if hit is not None and hit[0]() is asm:
-        return hit[1].copy()
-    out = _build_elements_table(asm)
-    try:
-        ref = weakref.ref(asm, lambda _r, key=key: _ELEMENT_TABLES.pop(key, None))
-    except TypeError:  # an assembly-like object without weak references: not kept
-        return out
-    _ELEMENT_TABLES[key] = (ref, out)
-    return out.copy()
-
-
-def _build_elements_table(asm: Assembly) -> pd.DataFrame:
+    ``kind``, ``stage``, ``role``, ``planet`` (:attr:`SimulationResult.elements`)."""
     rows = {}
     for part in (asm.contacts, asm.springs, asm.round):
         if part is None:

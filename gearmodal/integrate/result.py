@@ -115,12 +115,12 @@ class SimulationResult:
                 raise TypeError(f"SimulationResult needs {name!r} (or tables=...)")
 
     def __getstate__(self):
-        for name in self.TABLES:  # build what is still lazy: the builder holds the systems
-            getattr(self, name)
+        for name in (*self.TABLES, "elements"):  # build what is still lazy: the builders
+            getattr(self, name)  # hold the systems and the assembly
         return {**self.__dict__, "tables": None}
 
     def __setstate__(self, state):
-        for name in self.TABLES:  # results pickled before the tables were lazy
+        for name in (*self.TABLES, "elements"):  # results pickled before these were lazy
             if name in state:
                 state["_" + name] = state.pop(name)
         self.__dict__.update(state)
@@ -458,3 +458,23 @@ for _name, _doc in (
         ("contact_state", "Closed (True) per contact at the output times.")):
     # after the dataclass is made: its __init__ assigns through these (a None keeps it lazy)
     setattr(SimulationResult, _name, _table(_name, _doc))
+
+
+def _elements_property() -> property:
+    """:attr:`SimulationResult.elements`, which :func:`gearmodal.simulate` gives as its builder
+    (a callable): built on first read (~0.5 ms of pandas a run need not pay), then kept."""
+
+    def get(self):
+        val = self.__dict__.get("_elements")
+        if callable(val):
+            val = self.__dict__["_elements"] = val()
+        return val
+
+    def set_(self, val):
+        self.__dict__["_elements"] = val
+
+    return property(get, set_, doc="The model's structure: one row per element with contact "
+                    "or spring rows (kind, stage, role, planet), indexed by element.")
+
+
+SimulationResult.elements = _elements_property()
