@@ -29,7 +29,7 @@ lifetime revolutions ``P_eq = (sum w N_run P_eq,run^p / sum w N_run)^(1/p)`` and
 (rotor revolutions) of the rotor torque, tooth and planet-bearing force summed likewise.
 
 The runs use the mass-scaling rung at 500 Hz by default (``top_frequency_hz``;
-gearmodal.massscale): 2.4-2.7x faster than the full model on the 30 s double-contact runs.
+gearmodal.massscale): 2.2-2.7x faster than the full model on the 30 s double-contact runs.
 On the reference gearbox its loads are within 0.05 % of the full model's. On the clearance
 gearbox the paired-seed means agree within the seeds' scatter, and the planet-bearing DEL is
 0.5-1 % low (benchmarks/RESULTS.md, rung ensemble). ``None`` or 0 (``--top-frequency 0``)

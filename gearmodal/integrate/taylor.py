@@ -68,8 +68,13 @@ TAIL = 1e-15
 #: largest coefficient, far under the series' own truncation (``TAIL``)
 E_TINY = 2.0**-70
 #: event-free pieces a new contact state runs on the bound over every state before its own
-#: bound is computed (an eigenproblem of size n)
+#: bound is computed (an eigenproblem of size n). On the planetary stage's double-contact
+#: transient (219 states in 310 events) 1 computes 65 bounds, 2 computes 3: 4.4 and 3.6 ms
+#: against 5.8 ms for every state met; the turbine's states last thousands of pieces
 LAZY = 2
+#: right after an event that came within this fraction of the longest piece, the next piece
+#: is this fraction long (fewer terms: the next event is likely near); 0.1-0.6 measured on
+#: the planetary stage, 0.25-0.4 best
 DENSE = 0.25
 #: resolution of the per-piece term count (fractions of the reach)
 TERM_BINS = 64
@@ -1111,9 +1116,10 @@ class StateBound:
     ``kappa = rho_all / rho_all(0)``: the ratio of the run's bound over every state (with its
     margins over the azimuth, the speed re-basing and the turning harmonics) to the same
     all-states formula at azimuth 0. So ``rho_s <= rho_all`` always, and ``rho_s`` carries the
-    all-states margins. The kernel evaluates it once per state met (an eigenproblem of size
-    ``n``) and keeps it in a table by the state's bit mask; the series' tail check guards
-    each piece as before."""
+    all-states margins. The kernel evaluates it once per lasting state (an eigenproblem of
+    size ``n``, when ``LAZY`` pieces of the state have ended without an event; until then the
+    state runs on ``rho_all``) and keeps it in a table by the state's bit mask; the series'
+    tail check guards each piece as before."""
 
     def __init__(self, system, rho_all: float, parts: tuple | None = None):
         """``parts``: ``spectral_bound_all(system, parts=True)`` when already computed (a
