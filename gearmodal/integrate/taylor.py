@@ -902,11 +902,13 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 if gb[e] <= 0.0:
                     order[n_order] = e
                     n_order += 1
-            # each coordinate's series summed in magnitude (k >= 1): a contact's gap moves by at
-            # most sum_j |w_j| A_j over the piece, which clears most gaps without their series
+            # each coordinate's series summed in magnitude from the second order on (k >= 2):
+            # on the piece a contact's gap is at most its start value, plus its first-order
+            # term where that rises, plus sum_j |w_j| A_j, which clears most gaps without
+            # their series ((B1) a fortiori)
             for i in range(n):
                 colsum[i] = 0.0
-            for kk in range(1, nt):
+            for kk in range(2, nt):
                 for i in range(n):
                     colsum[i] += abs(Bv[kk, i])
             for o in range(n_order):
@@ -915,12 +917,15 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 sg = -1.0 if s[e] else 1.0
                 if o >= n_cert and wptr[e + 1] > wptr[e]:
                     g0e = -off[e]
+                    g1e = 0.0
                     move = 0.0
                     for jj in range(wptr[e], wptr[e + 1]):
-                        g0e += wval[jj] * Bv[0, widx[jj]]
-                        move += abs(wval[jj]) * colsum[widx[jj]]
-                    if sg * g0e + move < 0.0:
-                        continue  # no crossing on the piece ((B1) a fortiori)
+                        col = widx[jj]
+                        g0e += wval[jj] * Bv[0, col]
+                        g1e += wval[jj] * Bv[1, col]
+                        move += abs(wval[jj]) * colsum[col]
+                    if sg * g0e + max(sg * g1e, 0.0) + move < 0.0:
+                        continue  # no crossing on the piece
                 # the gap's series, scaled to [0, limit]: nonzero by nonzero of the gap row
                 # (independent sums over the terms; -5 % of the run against term by term)
                 for kk in range(nt):
