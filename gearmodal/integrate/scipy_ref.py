@@ -28,6 +28,10 @@ from scipy.integrate import solve_ivp
 from ..errors import ModelError
 from .system import PiecewiseLinearSystem
 
+#: crossings within this fraction of ``dt`` of a located event switch with it (a root at the
+#: restart point is not detected by ``solve_ivp``)
+TIE = 1e-9
+
 
 def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
               x0: np.ndarray, s0: np.ndarray, scipy_method: str = "RK45", rtol: float = 1e-6,
@@ -176,6 +180,19 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         for e in fired:
             if e >= nc:
                 sr = rd.switch(x, sr, e - nc, float(te), nc, events)
+                continue
+            before = bool(s[e])
+            s = s.copy()
+            s[e] = not before
+            force = system.c[e] * wv[e] if s[e] else 0.0
+            events.append((float(te), int(e), before, bool(s[e]), float(r[e]), float(force)))
+        # a contact at its own crossing at this instant (zero backlash: the back flank closes
+        # as the front one opens) has its root at the start of the next span, where solve_ivp
+        # never reports one: it switches now, like the exact method's simultaneous roots
+        p = system.penetration(x, azimuth(te))
+        tie = np.abs(r) * max(TIE * dt, 16 * np.finfo(float).eps * abs(te))
+        for e in range(nc):
+            if e in fired or abs(p[e]) > tie[e] or (r[e] > 0) == bool(s[e]) or r[e] == 0:
                 continue
             before = bool(s[e])
             s = s.copy()
