@@ -71,7 +71,11 @@ class SimulationResult:
     settings : the settings that made the run (method, dt, options).
     initial_state : ``{contact name: closed}`` at ``t[0]``.
     stats : counters and CPU time of the run (``cpu_s`` is the integration; the tables are
-        not in it, see below).
+        not in it, see below). The exact method's (Taylor propagator): ``pieces`` summed,
+        ``halved`` (a piece whose series tail was not negligible), ``root_searches`` (gaps
+        whose bound did not exclude a crossing), ``taylor_rows`` (gap series formed) and
+        ``state_bounds`` (contact states whose own spectral bound was computed, an
+        eigenproblem each).
     constraint_forces : coupled systems (:class:`gearmodal.Coupled`) only: the Lagrange
         multipliers, one column per constraint row (N or N m), i.e. the forces the constraints
         transmit (for a joint: the force on body ``b`` in joint axes).

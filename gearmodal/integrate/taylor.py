@@ -1317,6 +1317,7 @@ class TaylorIntegrator:
         EV = np.empty((max(64, 4 * (self.max_events + sysm.n_contacts + 1)), 6))
         k, n_ev = 0, 0
         counts = np.zeros(4, dtype=np.int64)
+        met = int((self.state_bound.keys >= 0).sum())  # states bounded before this run
         while True:
             status, k, n_ev, contact = taylor_run(
                 self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
@@ -1338,5 +1339,6 @@ class TaylorIntegrator:
                 "add damping, or raise max_events_per_step")
         events = EV[:n_ev].copy()  # rows (time, contact, before, after, rate, force)
         self.counts = {"pieces": int(counts[0]), "halved": int(counts[1]),
-                       "root_searches": int(counts[2]), "taylor_rows": int(counts[3])}
+                       "root_searches": int(counts[2]), "taylor_rows": int(counts[3]),
+                       "state_bounds": int((self.state_bound.keys >= 0).sum()) - met}
         return X, S, events
