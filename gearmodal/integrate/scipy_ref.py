@@ -177,25 +177,19 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             muted = set()
         r = system.rate(x, azimuth(te))
         wv = system.velocity_term(x, azimuth(te))
-        for e in fired:
-            if e >= nc:
-                sr = rd.switch(x, sr, e - nc, float(te), nc, events)
-                continue
-            before = bool(s[e])
-            s = s.copy()
-            s[e] = not before
-            force = system.c[e] * wv[e] if s[e] else 0.0
-            events.append((float(te), int(e), before, bool(s[e]), float(r[e]), float(force)))
         # a contact at its own crossing at this instant (zero backlash: the back flank closes
         # as the front one opens) has its root at the start of the next span, where solve_ivp
         # never reports one: it switches now, like the exact method's simultaneous roots
         p = system.penetration(x, azimuth(te))
         tie = np.abs(r) * max(TIE * dt, 16 * np.finfo(float).eps * abs(te))
-        for e in range(nc):
-            if e in fired or abs(p[e]) > tie[e] or (r[e] > 0) == bool(s[e]) or r[e] == 0:
+        tied = [e for e in range(nc) if e not in fired and abs(p[e]) <= tie[e]
+                and r[e] != 0 and (r[e] > 0) != bool(s[e])]
+        s = s.copy()
+        for e in fired + tied:
+            if e >= nc:
+                sr = rd.switch(x, sr, e - nc, float(te), nc, events)
                 continue
             before = bool(s[e])
-            s = s.copy()
             s[e] = not before
             force = system.c[e] * wv[e] if s[e] else 0.0
             events.append((float(te), int(e), before, bool(s[e]), float(r[e]), float(force)))
