@@ -5,6 +5,8 @@ with a step longer than the contact does not, and the event count tells missed c
 import sys
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 
 import stability_map as sm  # noqa: E402
@@ -33,15 +35,17 @@ def test_chatter_counts_events_against_exact():
     assert sm.classify(coarse, exact)[0] == "missed_events"
 
 
-def test_scipy_switches_the_back_flank_with_the_front_at_zero_backlash():
-    # zero backlash: the back flank's crossing is exactly at the instant the front one opens,
-    # the restart point of solve_ivp, where an event is never reported; without the switch
-    # the teeth pass through each other and the energy grows tenfold (the map's 'blowup')
-    name = "rattle k=1e+08 m=1 b=0"
+@pytest.mark.parametrize("name", ["rattle k=1e+08 m=1 b=0", "rattle k=1e+11 m=0.1 b=0"])
+def test_scipy_switches_the_back_flank_with_the_front_at_zero_backlash(name):
+    # zero backlash: the back flank's crossing is at the instant the front one opens, the
+    # restart point of solve_ivp, where its event is missed once rounding has put the located
+    # state past it; without the switch the teeth pass through each other and the energy
+    # grows tenfold (the map's 'blowup'). The stiff light pair's contact (2 us) puts the tie
+    # window at the event location's own tolerance, not at 1e-9 dt
     exact = sm.run_one(name, dict(method="exact"), budget_s=60)
     ref = sm.run_one(name, dict(method="scipy", scipy_method="RK45", rtol=1e-9), budget_s=60)
     status, drift, traj = sm.classify(ref, exact)
-    assert status == "ok" and drift < 1e-6 and traj < 1e-6  # RK45 at rtol 1e-9
+    assert status == "ok" and drift < 1e-6 and traj < 1e-6  # RK45 at rtol 1e-9: ~8e-8
     assert len(ref["events"]) == len(exact["events"]) == 49
-    # event times to the solver's tolerance (4e-13 s measured): 5e-8 of the 0.2 ms contact
-    assert abs(ref["events"] - exact["events"]).max() < 1e-11
+    # event times to the solver's tolerance: 1e-7 of the contact (4e-13 s of 0.2 ms measured)
+    assert abs(ref["events"] - exact["events"]).max() < 1e-7 * ref["contact_s"]

@@ -188,7 +188,8 @@ def test_the_event_dense_stage_does_bounded_work():
     assert st["n_events"] == 310
     assert st["n_events"] <= st["pieces"] <= 430
     assert st["root_searches"] <= 1430 and st["taylor_rows"] <= 11_900
-    assert 1 <= st["state_bounds"] <= 10  # LAZY: only states that outlive two pieces
+    # the start state's bound, then only states that outlive two pieces (LAZY)
+    assert st["state_bounds"] <= 10
     assert st["halved"] == 0  # the bound holds on every piece: no tail check fails
 
 

@@ -74,8 +74,9 @@ class SimulationResult:
         not in it, see below). The exact method's (Taylor propagator): ``pieces`` summed,
         ``halved`` (a piece whose series tail was not negligible), ``root_searches`` (gaps
         whose bound did not exclude a crossing), ``taylor_rows`` (gap series formed) and
-        ``state_bounds`` (contact states whose own spectral bound was computed, an
-        eigenproblem each).
+        ``state_bounds`` (contact states whose own spectral bound was computed and kept, an
+        eigenproblem each; once the table's 1 024 states are full, further states are solved
+        each time they last and not counted).
     constraint_forces : coupled systems (:class:`gearmodal.Coupled`) only: the Lagrange
         multipliers, one column per constraint row (N or N m), i.e. the forces the constraints
         transmit (for a joint: the force on body ``b`` in joint axes).

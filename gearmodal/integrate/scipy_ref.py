@@ -28,8 +28,9 @@ from scipy.integrate import solve_ivp
 from ..errors import ModelError
 from .system import PiecewiseLinearSystem
 
-#: crossings within this fraction of ``dt`` of a located event switch with it (a root at the
-#: restart point is not detected by ``solve_ivp``)
+#: crossings within this fraction of ``dt`` of a located event (and at least within the event
+#: location's tolerance) switch with it: ``solve_ivp`` misses a root at its restart point
+#: once rounding has put the restart state past it
 TIE = 1e-9
 
 
@@ -178,10 +179,12 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         r = system.rate(x, azimuth(te))
         wv = system.velocity_term(x, azimuth(te))
         # a contact at its own crossing at this instant (zero backlash: the back flank closes
-        # as the front one opens) has its root at the start of the next span, where solve_ivp
-        # never reports one: it switches now, like the exact method's simultaneous roots
+        # as the front one opens) has its root at the start of the next span, which solve_ivp
+        # misses once the located point's rounding has put it past the crossing: it switches
+        # now, like the exact method's simultaneous roots. The window is at least the event
+        # location's own tolerance (4 eps absolute and relative in time, scipy's root finder)
         p = system.penetration(x, azimuth(te))
-        tie = np.abs(r) * max(TIE * dt, 16 * np.finfo(float).eps * abs(te))
+        tie = np.abs(r) * max(TIE * dt, 16 * np.finfo(float).eps * (1.0 + abs(te)))
         tied = [e for e in range(nc) if e not in fired and abs(p[e]) <= tie[e]
                 and r[e] != 0 and (r[e] > 0) != bool(s[e])]
         s = s.copy()
