@@ -77,6 +77,9 @@ SAVE_VERSION = 1
 HOLDS = ("interpolate", "hold", "linear")
 #: time (s) over which a re-based reference speed takes up the drivetrain's rigid rotation
 REBASE_TAU = 0.1
+#: a gearbox state entry beyond this (m, rad, m/s, rad/s from the re-based rotation) means the
+#: integration method diverged
+DIVERGED = 1e6
 
 
 @dataclass
@@ -228,7 +231,9 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         drivetrain against the reference that re-bases it: the turning geometry is taken at
         the reference azimuth, so this bounds how far it lags the true carrier angle.
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``; ``options`` go to it (refused if it
-        does not take them).
+        does not take them). A method that diverges (a gearbox state entry above
+        :data:`DIVERGED`) stops the run with a :class:`gearmodal.ModelError` naming it and the
+        time.
     gravity : the weight of every gearbox body (the model's load ``gravity``, along the
         turbine's ``tilt_deg``): True (standard gravity, 9.80665 m/s^2), False, or g in m/s^2.
     top_frequency_hz : the mass-scaling rung (:mod:`gearmodal.massscale`): the gearbox's
@@ -429,8 +434,18 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         az_grid[kk + a0:kk + m_sub + 1] = az0 + om_f * (tt[a0:] - t)
         run.advance(system, m_sub, F, azimuth0=az0)
         x = run.x.copy()
-        if not math.isfinite(om):
-            raise ModelError("simulate_drivetrain", f"rotor speed not finite at t = {t:.3f} s")
+        if not (math.isfinite(om) and np.abs(x).max() <= DIVERGED):
+            # no gearbox state reaches this (deflections from the re-based rotation, in m and
+            # rad, and their rates): the method has diverged, and the next aerodynamic step
+            # would fail somewhere less clear (the generator's slip overflows)
+            raise ModelError(
+                "method", f"= {method!r}: the gearbox state diverged in the aerodynamic step "
+                f"ending at t = {t + aero_dt:.3f} s (largest entry {np.abs(x).max():.3g}, "
+                f"above {DIVERGED:g}); "
+                + ("Newmark switches contacts at step ends, which is unstable with stiff "
+                   "meshes and a clearance (benchmarks/RESULTS.md, stability map): use "
+                   "method='exact'" if method == "newmark" else "reduce dt or use "
+                   "method='exact'"))
         if progress is not None:
             progress(k + 1, n_aero)
     X, S, events = run.arrays()
