@@ -386,17 +386,12 @@ class _Tables:
         return pd.DataFrame(data, index=self.index, columns=labels)
 
     def _force_arrays(self) -> tuple[np.ndarray, list[str]]:
+        """The force table's values and labels, built segment by segment into the one output
+        array (no temporaries of the run's length: a 600 s turbine run has 600 001 rows)."""
         seg_systems, t, X, S = self.seg_systems, self.t, self.X, self.S
         system = self.system
         asm = system.asm
         c = asm.contacts
-        P = np.empty((len(t), system.n_contacts))
-        R = np.empty_like(P)
-        for k0, k1, sy in seg_systems:  # each segment with its geometry (turning rows: exact)
-            P[k0:k1 + 1], R[k0:k1 + 1] = sy.gaps(X[k0:k1 + 1], t[k0:k1 + 1] - t[k0])
-        # alternating mesh flanks: every contact's stiffness at each time
-        K = system.k if self.mesh_k is None else self.mesh_k
-        Fc = np.where(S, K * P + system.c * R, 0.0)
         # the force columns each element gave its contacts (Contacts.columns): one per mesh
         # flank, one per bearing direction (its two dead-band sides combined; a polygon's
         # facet forces resolved on the bearing's x and y axes)
@@ -410,24 +405,30 @@ class _Tables:
         proj = np.zeros((len(c.element), len(names)))
         np.add.at(proj, (np.array(rows_, dtype=np.int64), np.array(cols, dtype=np.int64)),
                   np.array(weights))
-        blocks, labels = [Fc @ proj], list(names)
-        sp = asm.springs
-        if sp is not None and len(sp):
-            Fs = np.empty((len(t), len(sp)))
-            for k0, k1, sy in seg_systems:
-                Fs[k0:k1 + 1] = sy.spring_forces(X[k0:k1 + 1], t[k0:k1 + 1] - t[k0])
-            blocks.append(Fs)
+        labels = list(names)
+        sp, rd = asm.springs, asm.round
+        n_sp = len(sp) if sp is not None else 0
+        n_rd = len(rd) if rd is not None else 0
+        if n_sp:
             labels += [f"{el}.{ct}" for el, ct in zip(sp.element, sp.contact, strict=True)]
-        rd = asm.round
-        if rd is not None and len(rd):  # round clearances (scipy): k (r - c) + c_d r' if r > c
+        if n_rd:  # round clearances (scipy): k (r - c) + c_d r' if r > c
             from .scipy_ref import _Round
 
-            Fr = np.empty((len(t), len(rd)))
-            for k0, k1, sy in seg_systems:
-                rr = _Round(sy)
-                Xs = X[k0:k1 + 1]
-                Fr[k0:k1 + 1] = rr.forces(Xs, rr.radius(Xs) > rr.c).reshape(len(Xs), -1)
-            blocks.append(Fr)
             labels += [f"{el}.{ct}" for el, ct in zip(rd.element, rd.contact, strict=True)]
+        out = np.empty((len(t), len(labels)))
+        nf = len(names)
+        # alternating mesh flanks: every contact's stiffness at each time
+        K = system.k if self.mesh_k is None else self.mesh_k
+        for k0, k1, sy in seg_systems:  # each segment with its geometry (turning rows: exact)
+            sl = slice(k0, k1 + 1)
+            Xs, ts = X[sl], t[sl] - t[k0]
+            P, R = sy.gaps(Xs, ts)
+            Ks = K if K.ndim == 1 else K[sl]
+            out[sl, :nf] = np.where(S[sl], Ks * P + system.c * R, 0.0) @ proj
+            if n_sp:
+                out[sl, nf:nf + n_sp] = sy.spring_forces(Xs, ts)
+            if n_rd:
+                rr = _Round(sy)
+                out[sl, nf + n_sp:] = rr.forces(Xs, rr.radius(Xs) > rr.c).reshape(len(Xs), -1)
         # a bearing direction is a spring or a dead band, never both: the labels are distinct
-        return np.concatenate(blocks, axis=1), labels
+        return out, labels
