@@ -419,6 +419,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                                                   loads0)
                 s = system.penetration(x, psi_f + mount) > 0
                 run = Driver(method, dt, x, s, **options)
+                run.reserve(n_steps)
             else:
                 run.rebase(system, x, psi_f + mount)
                 stats["n_rebases"] += 1
