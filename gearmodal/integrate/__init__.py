@@ -349,11 +349,14 @@ class _Tables:
 
     def q(self) -> pd.DataFrame:
         sy = self.system
-        return pd.DataFrame(self.X[:, :sy.n], index=self.index, columns=sy.asm.dof_names)
+        # a view of the run's array (copy-on-write keeps it safe): not a second copy
+        return pd.DataFrame(self.X[:, :sy.n], index=self.index, columns=sy.asm.dof_names,
+                            copy=False)
 
     def v(self) -> pd.DataFrame:
         sy = self.system
-        return pd.DataFrame(self.X[:, sy.n:], index=self.index, columns=sy.asm.dof_names)
+        return pd.DataFrame(self.X[:, sy.n:], index=self.index, columns=sy.asm.dof_names,
+                            copy=False)
 
     def contact_state(self) -> pd.DataFrame:
         return pd.DataFrame(self.S, index=self.index, columns=self.system.names)
