@@ -125,25 +125,39 @@ def test_turbulence_is_seeded_and_sampled():
 
 
 def test_turbulence_box_is_pyconturbs_frequency_by_frequency(monkeypatch):
-    """The box's coherence in one vectorised chunk is PyConTurb's frequency-by-frequency box
-    to rounding; a chunk size between 1 and the frequency count is not (PyConTurb 2.7 gives
-    the frequencies at multiples of the chunk another frequency's coherence), so only those
-    two are used, by the memory the chunk takes."""
+    """The box's coherence in chunks of frequencies (all in one, or as many as fit in 128 MiB)
+    is PyConTurb's frequency-by-frequency box to rounding. PyConTurb 2.7's own chunked loop
+    gives the frequencies at multiples of the chunk another frequency's coherence; the
+    aligned chunk indices (wind.aligned_chunks) make any chunk size right."""
+    from pyconturb import gen_spat_grid, gen_turb
+
     from gearmodal.turbine import wind as wind_mod
 
     kw = dict(mean_speed=10.0, hub_height=40.0, turbulence_intensity=0.12, duration=20.0,
               dt=0.2, grid_points=4, seed=3)
     nt = 101
     assert wind_mod.coherence_chunk(nt, 48) == 51
-    assert wind_mod.coherence_chunk(6001, 147) == 1  # 600 s at 0.1 s, 7 x 7: 520 MB
+    # 600 s at 0.1 s on 7 x 7 points: 520 MB for all 3 001 frequencies, 776 per 128 MiB
+    assert wind_mod.coherence_chunk(6001, 147) == 776
     fast = Wind(**kw)._turbulence()[3]
     monkeypatch.setattr(wind_mod, "_BOXES", {})  # each box generated, none from the cache
     monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n: 1)
     slow = Wind(**kw)._turbulence()[3]
     np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-12 * np.abs(slow).max())
-    monkeypatch.setattr(wind_mod, "_BOXES", {})
-    monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n: 16)
-    assert np.abs(Wind(**kw)._turbulence()[3] - slow).max() > 1e-3 * np.abs(slow).max()
+    for chunk in (2, 16, 50):  # chunk sizes that split the 51 frequencies unevenly
+        monkeypatch.setattr(wind_mod, "_BOXES", {})
+        monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n, c=chunk: c)
+        np.testing.assert_allclose(Wind(**kw)._turbulence()[3], slow, rtol=0,
+                                   atol=1e-12 * np.abs(slow).max())
+    # the upstream loop without the aligned indices: wrong at the multiples of the chunk
+    spat = gen_spat_grid(np.linspace(-20, 20, 4), 40.0 + np.linspace(-20, 20, 4))
+    args = dict(T=20.2, nt=nt, seed=3, u_ref=10.0, z_ref=40.0)
+    one = gen_turb(spat, nf_chunk=1, **args).to_numpy()
+    plain = gen_turb(spat, nf_chunk=16, **args).to_numpy()
+    assert np.abs(plain - one).max() > 1e-3 * np.abs(one).max()
+    with wind_mod.aligned_chunks():
+        fixed = gen_turb(spat, nf_chunk=16, **args).to_numpy()
+    np.testing.assert_allclose(fixed, one, rtol=0, atol=1e-12 * np.abs(one).max())
 
 
 def test_turbine_loads_drive_the_gearbox():

@@ -31,18 +31,67 @@ import numpy as np
 from ..errors import ModelError
 from ..model.schema import Field, Table
 
-#: bytes the coherence matrices of every frequency may take at once (PyConTurb ``nf_chunk``)
+#: bytes the coherence matrices of one chunk of frequencies may take (PyConTurb ``nf_chunk``)
 COHERENCE_BYTES = 128 * 2**20
 
 
 def coherence_chunk(nt: int, n_points: int) -> int:
-    """PyConTurb's ``nf_chunk`` for a box of ``nt`` time steps and ``n_points`` columns: every
-    frequency in one chunk (its coherence in one vectorised call, 6x faster on the 30 s scene)
-    when they fit in :data:`COHERENCE_BYTES`, else 1. Nothing in between: PyConTurb 2.7 gives
-    each frequency at a multiple of a chunk size between 1 and the count the coherence of
-    another frequency (the same box only at those two settings; tests/test_turbine.py)."""
+    """PyConTurb's ``nf_chunk`` for a box of ``nt`` time steps and ``n_points`` columns: as
+    many frequencies per chunk (their coherence in one vectorised call) as fit in
+    :data:`COHERENCE_BYTES`; every frequency in one chunk when they all fit (6x faster than
+    one at a time on the 30 s scene). Chunk sizes between 1 and the frequency count rely on
+    :func:`aligned_chunks` (PyConTurb 2.7 mislabels the frequencies at multiples of the
+    chunk); without it (another PyConTurb version) only 1 or all are used."""
     n_f = nt // 2 + 1
-    return n_f if n_f * n_points**2 * 8 <= COHERENCE_BYTES else 1
+    fit = max(COHERENCE_BYTES // (n_points**2 * 8), 1)
+    if fit >= n_f:
+        return n_f
+    return fit if _aligned_fix_applies() else 1
+
+
+def _aligned_fix_applies() -> bool:
+    """Whether the installed PyConTurb has the 2.7 chunk loop :func:`aligned_chunks` fixes."""
+    try:
+        from importlib.metadata import version
+
+        return version("pyconturb").startswith("2.7.")
+    except Exception:  # pragma: no cover - not installed
+        return False
+
+
+class aligned_chunks:  # noqa: N801 - a context manager used like a function
+    """Within the block, PyConTurb 2.7's ``gen_turb`` gets every frequency's own coherence
+    with any ``nf_chunk``. Its loop (``pyconturb/simulation.py``) makes a chunk at frequency
+    index ``i = (k - 1) c + 1`` from the indices ``get_chunk_idcs`` gives for chunk
+    ``i // c = k - 1`` (``[(k - 1) c, k c)``) and reads entry ``i % c`` for ``i`` up to
+    ``k c``: entry 0, read at ``i = k c``, holds frequency ``(k - 1) c``. The indices given
+    here put ``k c`` in entry 0 (the others unchanged), so every read is right; checked against
+    the frequency-by-frequency box in tests/test_turbine.py. Does nothing for another
+    PyConTurb version."""
+
+    def __enter__(self):
+        self._saved = None
+        if _aligned_fix_applies():
+            import pyconturb.simulation as sim
+
+            self._saved = sim.get_chunk_idcs
+
+            def get_chunk_idcs(freq, i_chunk, nf_chunk):
+                if nf_chunk <= 1:
+                    return self._saved(freq, i_chunk, nf_chunk)
+                idx = np.arange(i_chunk * nf_chunk, (i_chunk + 1) * nf_chunk)
+                idx[0] = (i_chunk + 1) * nf_chunk
+                return np.minimum(idx, len(freq) - 1)  # beyond the last: never read
+
+            sim.get_chunk_idcs = get_chunk_idcs
+        return self
+
+    def __exit__(self, *exc):
+        if self._saved is not None:
+            import pyconturb.simulation as sim
+
+            sim.get_chunk_idcs = self._saved
+        return False
 
 
 #: turbulence boxes kept per process (by the wind's parameters; a 600 s box of 7 x 7 points
@@ -162,11 +211,12 @@ class Wind:
                                  "pip install 'gearmodal[wind]'") from err
             spat = gen_spat_grid(y, z)
             sig = self.turbulence_intensity * self.mean_speed
-            df = gen_turb(spat, T=nt * self.dt, nt=nt, seed=int(self.seed),
-                          u_ref=self.mean_speed, z_ref=self.hub_height,
-                          wsp_func=constant_profile, sig_func=constant_sig,
-                          sig_vals=[sig, 0.8 * sig, 0.5 * sig], comps=[0, 1, 2],
-                          nf_chunk=coherence_chunk(nt, spat.shape[1]))
+            with aligned_chunks():
+                df = gen_turb(spat, T=nt * self.dt, nt=nt, seed=int(self.seed),
+                              u_ref=self.mean_speed, z_ref=self.hub_height,
+                              wsp_func=constant_profile, sig_func=constant_sig,
+                              sig_vals=[sig, 0.8 * sig, 0.5 * sig], comps=[0, 1, 2],
+                              nf_chunk=coherence_chunk(nt, spat.shape[1]))
             vals = df.to_numpy()[:nt]  # columns u_p0, v_p0, w_p0, u_p1, ...: y outer, z inner
             box = vals.reshape(nt, ny, ny, 3).transpose(0, 3, 1, 2).copy()
             box -= box.mean(axis=0, keepdims=True)  # the mean comes from the profile
