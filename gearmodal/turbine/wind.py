@@ -23,6 +23,8 @@ form).
 
 from __future__ import annotations
 
+import contextlib
+import functools
 from dataclasses import dataclass
 
 import numba
@@ -49,6 +51,7 @@ def coherence_chunk(nt: int, n_points: int) -> int:
     return fit if _aligned_fix_applies() else 1
 
 
+@functools.cache
 def _aligned_fix_applies() -> bool:
     """Whether the installed PyConTurb has the 2.7 chunk loop :func:`aligned_chunks` fixes."""
     try:
@@ -59,7 +62,8 @@ def _aligned_fix_applies() -> bool:
         return False
 
 
-class aligned_chunks:  # noqa: N801 - a context manager used like a function
+@contextlib.contextmanager
+def aligned_chunks():
     """Within the block, PyConTurb 2.7's ``gen_turb`` gets every frequency's own coherence
     with any ``nf_chunk``. Its loop (``pyconturb/simulation.py``) makes a chunk at frequency
     index ``i = (k - 1) c + 1`` from the indices ``get_chunk_idcs`` gives for chunk
@@ -68,30 +72,25 @@ class aligned_chunks:  # noqa: N801 - a context manager used like a function
     here put ``k c`` in entry 0 (the others unchanged), so every read is right; checked against
     the frequency-by-frequency box in tests/test_turbine.py. Does nothing for another
     PyConTurb version."""
+    if not _aligned_fix_applies():
+        yield
+        return
+    import pyconturb.simulation as sim
 
-    def __enter__(self):
-        self._saved = None
-        if _aligned_fix_applies():
-            import pyconturb.simulation as sim
+    saved = sim.get_chunk_idcs
 
-            self._saved = sim.get_chunk_idcs
+    def get_chunk_idcs(freq, i_chunk, nf_chunk):
+        if nf_chunk <= 1:
+            return saved(freq, i_chunk, nf_chunk)
+        idx = np.arange(i_chunk * nf_chunk, (i_chunk + 1) * nf_chunk)
+        idx[0] = (i_chunk + 1) * nf_chunk
+        return np.minimum(idx, len(freq) - 1)  # beyond the last: never read
 
-            def get_chunk_idcs(freq, i_chunk, nf_chunk):
-                if nf_chunk <= 1:
-                    return self._saved(freq, i_chunk, nf_chunk)
-                idx = np.arange(i_chunk * nf_chunk, (i_chunk + 1) * nf_chunk)
-                idx[0] = (i_chunk + 1) * nf_chunk
-                return np.minimum(idx, len(freq) - 1)  # beyond the last: never read
-
-            sim.get_chunk_idcs = get_chunk_idcs
-        return self
-
-    def __exit__(self, *exc):
-        if self._saved is not None:
-            import pyconturb.simulation as sim
-
-            sim.get_chunk_idcs = self._saved
-        return False
+    sim.get_chunk_idcs = get_chunk_idcs
+    try:
+        yield
+    finally:
+        sim.get_chunk_idcs = saved
 
 
 #: turbulence boxes kept per process (by the wind's parameters; a 600 s box of 7 x 7 points
