@@ -44,24 +44,6 @@ QUANTITIES = ["max_front_force_N", "p99_tooth_force_N", "del_tooth_N",
 HALF_DT = 5e-4
 
 
-def half_step_runs(out: Path, top: float | None, seeds: int, duration: float) -> pd.DataFrame:
-    """The double-contact study's cases on ``seeds`` paired seeds at :data:`HALF_DT` (rows as
-    the study's runs.csv)."""
-    import double_contact
-
-    import gearmodal as gm
-
-    one = double_contact.cases(duration, 1, True, top)
-    table = pd.concat([one.assign(**{"wind.seed": 1 + k}) for k in range(seeds)])
-    labels = table.index.to_numpy()
-    res = gm.sweep(double_contact.SCENE,
-                   table.assign(**{"scene.dt": HALF_DT}).reset_index(drop=True),
-                   store=out / "store", metrics=double_contact.metrics(), progress=False)
-    res["case"] = labels
-    res["seed"] = res["wind.seed"]
-    return res
-
-
 def compare(rows: list, label: str, a: pd.DataFrame, b: pd.DataFrame) -> None:
     """Append per case and quantity the paired ratio ``a / b`` over the seeds."""
     for case in ("reference", "clearance", "clearance_rot60"):
@@ -94,8 +76,9 @@ def main(argv=None) -> int:
                            top_frequency_hz=top)
         runs[name] = pd.read_csv(out / name / "runs.csv")
         if args.half_step:
-            runs[f"{name} half step"] = half_step_runs(out / f"{name}_half", top, args.seeds,
-                                                       args.duration)
+            double_contact.run(out / f"{name}_half", duration=args.duration, seeds=args.seeds,
+                               progress=False, top_frequency_hz=top, dt=HALF_DT)
+            runs[f"{name} half step"] = pd.read_csv(out / f"{name}_half" / "runs.csv")
     rows: list = []
     compare(rows, "rung / full", runs["rung"], runs["full"])
     if args.half_step:
