@@ -141,7 +141,7 @@ def _coefficients_frozen(MKC, g0, g1, q, v, h, B, y):
     loop is the frozen part of :func:`_coefficients` written out again on purpose: a helper
     shared per term takes and drops an atomic reference count on each of its arrays every
     term (12-14 % of the planetary stage's event-dense run, measured), and the turning
-    function would take its 30 turning arrays on every piece of a frozen run. Both are
+    function called for a frozen run costs 8 % on that run (2.72 against 2.50 ms). Both are
     checked against closed forms (frozen: tests/validation/test_exactness.py; turning:
     tests/validation/test_rotating_geometry.py)."""
     n_terms, n = B.shape
