@@ -16,7 +16,8 @@ import numpy as np
 #: a receding gap whose Hermite interpolant comes this close to contact (relative to the
 #: change of the gap over the piece) is examined for a hidden brief contact (both propagators)
 GRAZE_MARGIN = 0.25
-#: crossings closer than this fraction of dt are switched together (symmetric planets)
+#: crossings closer than this fraction of dt are switched together (symmetric planets; the
+#: expm propagator, which steps by dt: the Taylor integrator has its own, on its time scale)
 SIMULTANEOUS = 1e-13
 
 

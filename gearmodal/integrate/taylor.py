@@ -40,7 +40,7 @@ import numba
 import numpy as np
 
 from ..errors import ModelError
-from .kernels import GRAZE_MARGIN, SIMULTANEOUS, _bisect_up
+from .kernels import GRAZE_MARGIN, _bisect_up
 from .kernels import _poly as _hpoly
 
 #: rho * (piece length) at most this: every modal component turns by at most 6 rad per piece.
@@ -78,6 +78,12 @@ LAZY = 2
 DENSE = 0.25
 #: resolution of the per-piece term count (fractions of the reach)
 TERM_BINS = 64
+#: crossings closer than this fraction of the longest piece over every state (``REACH / rho``,
+#: the system's own time scale) are switched together (symmetric planets, a flank opening as
+#: its back flank closes); the same window applies time events due at a piece's end. On the
+#: system's time scale and not the output step's, so that the solution does not depend on the
+#: output step (a run at half the step takes the same pieces, bit for bit)
+SIMULTANEOUS = 1e-13
 #: numba fast-math flags of the small dense loops: reassociation (vectorised sums and maxima)
 #: but no "no NaN / no inf" assumption, so that a non-finite state is still seen as such
 FAST = {"reassoc", "nsz", "arcp", "contract"}
@@ -638,7 +644,10 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     ``x``, ``s`` as left); 2 = more than ``max_events`` changes inside step ``k``, the last at
     ``contact``. ``counts`` (int64, 4) accumulates the pieces summed, the pieces halved (a
     state stiffer than ``h_max`` allows), the gap polynomials searched for a root and the
-    Taylor rows computed (the series' terms summed over the pieces).
+    Taylor rows computed (the series' terms summed over the pieces). ``simultaneous`` (s):
+    crossings this close are switched together, time events this close to a piece's end are
+    applied there (``SIMULTANEOUS`` times the system's time scale: nothing that moves the
+    solution depends on ``dt``, which only places the output rows).
 
     ``sched_t``, ``sched_e``, ``sched_k``: scheduled stiffness changes (time from step 0,
     contact, new stiffness; sorted by time), from entry ``sched_pos[0]`` on (advanced in place,
@@ -783,7 +792,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
         fresh = False  # ga, ra hold the gaps at (t, q, v) in state s
         while True:
             # scheduled stiffness changes due by now (time events)
-            while ip < n_sched and sched_t[ip] <= t + 1e-13 * dt:
+            while ip < n_sched and sched_t[ip] <= t + simultaneous:
                 e = sched_e[ip]
                 if s[e]:
                     _toggle(U, W, kc, cc, off, e, -1.0, MKC, acc)
@@ -799,7 +808,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 k2 = jn
                 t_end = k2 * dt
             remaining = t_end - t
-            if remaining <= 1e-13 * dt:
+            if remaining <= simultaneous:
                 break
             # right after a quick succession of events the next one is likely near: a piece
             # of a quarter of the reach needs fewer terms (ends of pieces cost nothing)
@@ -965,7 +974,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             if best == np.inf:
                 t_old = t
                 t = t_end if h == remaining else t + h
-                if ip < n_sched and sched_t[ip] - t < 1e-13 * dt:
+                if ip < n_sched and sched_t[ip] - t < simultaneous:
                     t = max(t, sched_t[ip])  # exactly at the time event
                 # the output times this piece passed: from its series (its end: the end state)
                 while jn <= k2 and jn * dt < t - 1e-13 * dt:
@@ -1301,6 +1310,7 @@ class TaylorIntegrator:
         self.n_terms = int(self.terms[-1])  # the full count, last in the table
         self.tscale = TERM_BINS * self.rho / reach
         self.h_max = reach / self.rho
+        self.h_all = self.h_max  # the system's time scale (the tie window's unit)
         self.MinvU = np.ascontiguousarray(system.MinvU)
         if system.turning:
             pr, GT = system.periodic, system.GT
@@ -1336,7 +1346,7 @@ class TaylorIntegrator:
                 self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
                 sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
                 self.terms, self.tscale, GRAZE_MARGIN,
-                SIMULTANEOUS * self.dt, self.max_events, X, S, EV, n_ev, counts, *sched,
+                SIMULTANEOUS * self.h_all, self.max_events, X, S, EV, n_ev, counts, *sched,
                 sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
                 *self.state_bound.args())
             if status == 0:

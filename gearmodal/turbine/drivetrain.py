@@ -376,13 +376,18 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         rows.append((t, om / RPM, math.degrees(psi) % 360.0, on, tg, tg * w_gen,
                      *(ld[c] for c in LOAD_COLUMNS), fy, fz))
         # -- loads on the gearbox over this aerodynamic step (held or extrapolated)
-        tt = t + dt * np.arange(m_sub + 1)
+        # the output times from the step's start, and the fraction of the step, j / m_sub:
+        # at half the output step the shared times get the same load and azimuth to the bit
+        # (not (t + tau) - t, rounded with t), so the exact method's solution does not depend
+        # on the output step
+        tau = dt * np.arange(m_sub + 1)
+        frac = np.arange(m_sub + 1) / m_sub
         u_now = np.array([ld["torque_Nm"], fy, fz])
         if aero_hold == "interpolate":
             u_next = np.array([ld_next["torque_Nm"], *turbine.rear_force(ld_next)])
-            u = u_now[None, :] + np.outer((tt - t) / aero_dt, u_next - u_now)
+            u = u_now[None, :] + np.outer(frac, u_next - u_now)
         elif aero_hold == "linear" and prev is not None:
-            u = u_now[None, :] + np.outer((tt - t) / aero_dt, u_now - prev)
+            u = u_now[None, :] + np.outer(frac, u_now - prev)
         else:
             u = np.repeat(u_now[None, :], m_sub + 1, axis=0)
         prev = u_now
@@ -432,7 +437,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                             + ([np.full(m_sub + 1, g)] if g else [])
                             + [np.ones(m_sub + 1)])
         a0 = 0 if kk == 0 else 1
-        az_grid[kk + a0:kk + m_sub + 1] = az0 + om_f * (tt[a0:] - t)
+        az_grid[kk + a0:kk + m_sub + 1] = az0 + om_f * tau[a0:]
         run.advance(system, m_sub, F, azimuth0=az0)
         x = run.x.copy()
         if not (math.isfinite(om) and np.abs(x).max() <= DIVERGED):
