@@ -86,7 +86,8 @@ def interactive_campbell(folder: Path, path: Path) -> Path:
     from .campbell import CampbellResult
 
     fig = CampbellResult.load(folder).plot_interactive(fmax_hz=60.0)
-    fig.write_html(path, include_plotlyjs="cdn", full_html=True)
+    # a fixed div id: the page is the same on every run (plotly draws a random one)
+    fig.write_html(path, include_plotlyjs="cdn", full_html=True, div_id="campbell-interactive")
     return path
 
 
