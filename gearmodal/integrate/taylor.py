@@ -79,10 +79,11 @@ DENSE = 0.25
 #: resolution of the per-piece term count (fractions of the reach)
 TERM_BINS = 64
 #: crossings closer than this fraction of the longest piece over every state (``REACH / rho``,
-#: the system's own time scale) are switched together (symmetric planets, a flank opening as
-#: its back flank closes); the same window applies time events due at a piece's end. On the
-#: system's time scale and not the output step's, so that the solution does not depend on the
-#: output step (a run at half the step takes the same pieces, bit for bit)
+#: the system's own time scale; at most the call's span) are switched together (symmetric
+#: planets, a flank opening as its back flank closes); the same window applies time events due
+#: at a piece's end. On the system's time scale and not the output step's, so that the
+#: solution does not depend on the output step (a run at half the step takes the same pieces,
+#: bit for bit)
 SIMULTANEOUS = 1e-13
 #: numba fast-math flags of the small dense loops: reassociation (vectorised sums and maxima)
 #: but no "no NaN / no inf" assumption, so that a non-finite state is still seen as such
@@ -639,15 +640,16 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
     ``MinvU`` (linear in between); rows ``X[k + 1]``, ``S[k + 1]`` are written after each step
     and every contact-state change appended to ``EV`` (time, contact, before, after, rate,
-    force) from row ``n_ev``. Returns ``(status, k, n_ev, contact)``: status 0 = done; 1 = the
-    event buffer may overflow in the next step (grow it and call again from step ``k`` with
-    ``x``, ``s`` as left); 2 = more than ``max_events`` changes inside step ``k``, the last at
-    ``contact``. ``counts`` (int64, 4) accumulates the pieces summed, the pieces halved (a
-    state stiffer than ``h_max`` allows), the gap polynomials searched for a root and the
-    Taylor rows computed (the series' terms summed over the pieces). ``simultaneous`` (s):
-    crossings this close are switched together, time events this close to a piece's end are
-    applied there (``SIMULTANEOUS`` times the system's time scale: nothing that moves the
-    solution depends on ``dt``, which only places the output rows).
+    force) from row ``n_ev``. Returns ``(status, k, n_ev, contact, EV)``: status 0 = done; 2 =
+    more than ``max_events`` changes inside step ``k``, the last at ``contact``; ``EV`` the
+    event rows (a larger array than the one passed if it ran full). ``counts`` (int64, 4)
+    accumulates the pieces summed, the pieces halved (a state stiffer than ``h_max`` allows),
+    the gap polynomials searched for a root and the Taylor rows computed (the series' terms
+    summed over the pieces). ``simultaneous`` (s): crossings this close are switched
+    together, time events this close to a piece's end are applied there (``SIMULTANEOUS``
+    times the system's time scale: nothing that moves the solution depends on ``dt``, which
+    only places the output rows, beyond rounding of ``k dt`` when the step is not halved or
+    doubled).
 
     ``sched_t``, ``sched_e``, ``sched_k``: scheduled stiffness changes (time from step 0,
     contact, new stiffness; sorted by time), from entry ``sched_pos[0]`` on (advanced in place,
@@ -751,11 +753,6 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     ip = sched_pos[0]
     n_sched = sched_t.shape[0]
     while k < n_steps:
-        if n_ev + max_events + nc + 1 > cap:
-            x[:n] = q
-            x[n:] = v
-            sched_pos[0] = ip
-            return 1, k, n_ev, -1
         # the output steps from k on whose forces lie on one line: one stretch of pieces (the
         # force has no kink inside it), outputs read off the pieces' series
         k2 = _stretch(F, k, n_steps)
@@ -802,11 +799,6 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 else:
                     kc[e] = sched_k[ip]
                 ip += 1
-            if jn < k2 and n_ev + 2 * (max_events + nc + 1) > cap:
-                # the event buffer runs low: the stretch ends at the next output time, where
-                # the caller can grow it (room for this step's events is left, by the 2)
-                k2 = jn
-                t_end = k2 * dt
             remaining = t_end - t
             if remaining <= simultaneous:
                 break
@@ -1013,6 +1005,13 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             t = t_ev
             tol = simultaneous / h
             last = -1
+            if n_ev + nc > cap:
+                # the event buffer is full: a larger one, here (ending the stretch at an output
+                # time for the caller to grow it would make the pieces depend on dt)
+                grown = np.empty((max(2 * cap, n_ev + nc + 64), 6))
+                grown[:n_ev] = EV[:n_ev]
+                EV = grown
+                cap = EV.shape[0]
             for e in range(nc):
                 if roots[e] <= best + tol:
                     before = s[e]
@@ -1057,7 +1056,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 x[:n] = q
                 x[n:] = v
                 sched_pos[0] = ip
-                return 2, jn - 1, n_ev, last
+                return 2, jn - 1, n_ev, last, EV
             if toggled >= REFRESH:  # rounding of the updates, rebuilt from scratch
                 _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
                 toggled = 0
@@ -1076,7 +1075,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     x[:n] = q
     x[n:] = v
     sched_pos[0] = ip
-    return 0, k, n_ev, -1
+    return 0, k, n_ev, -1, EV
 
 
 def radius_bound(k: float, c: float) -> float:
@@ -1337,23 +1336,20 @@ class TaylorIntegrator:
         X[0], S[0] = x0, s0
         x = np.array(x0, dtype=float)
         s = np.array(s0, dtype=bool)
-        EV = np.empty((max(64, 4 * (self.max_events + sysm.n_contacts + 1)), 6))
+        EV = np.empty((max(64, 4 * (self.max_events + sysm.n_contacts + 1)), 6))  # grows
         k, n_ev = 0, 0
         counts = np.zeros(4, dtype=np.int64)
         met = int((self.state_bound.keys >= 0).sum())  # states bounded before this run
-        while True:
-            status, k, n_ev, contact = taylor_run(
-                self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
-                sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
-                self.terms, self.tscale, GRAZE_MARGIN,
-                SIMULTANEOUS * self.h_all, self.max_events, X, S, EV, n_ev, counts, *sched,
-                sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
-                *self.state_bound.args())
-            if status == 0:
-                break
-            if status == 1:
-                EV = np.concatenate([EV, np.empty_like(EV)])
-                continue
+        # the tie window: on the system's time scale, at most the call's span (a system with
+        # no stiffness has rho = 0: its time scale is unbounded)
+        tie = SIMULTANEOUS * min(self.h_all, n_steps * self.dt)
+        status, k, n_ev, contact, EV = taylor_run(
+            self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
+            sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
+            self.terms, self.tscale, GRAZE_MARGIN, tie, self.max_events, X, S, EV, n_ev,
+            counts, *sched, sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
+            *self.state_bound.args())
+        if status != 0:
             raise ModelError(
                 "max_events_per_step",
                 f"more than {self.max_events} contact-state changes inside one step "
