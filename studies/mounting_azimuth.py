@@ -160,8 +160,9 @@ def _effects_text(eff: pd.DataFrame, seeds: int) -> str:
     n = len(eff)
     return (f"Beyond the 95 % intervals over {seeds} paired seeds, "
             + "; and ".join(parts)
-            + f". {len(differ)} of {n} comparisons; at 95 % about {0.05 * n:.1f} would by "
-            "chance alone.")
+            + f". {len(differ)} of {n} comparisons differ; at 95 % about {0.05 * n:.1f} would "
+            "differ by chance alone (a rough count: the comparisons share the best's runs, "
+            "and the best was picked on the 99th-percentile bearing force).")
 
 
 if __name__ == "__main__":
