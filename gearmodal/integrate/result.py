@@ -223,10 +223,10 @@ class SimulationResult:
         # simultaneous double contact on several planets of one stage: sweep the boundaries
         multi = []
         by_stage: dict[str, list] = {}
+        stage = {m: self.stage_of(m) for m in meshes}  # once per mesh, not per episode
         for r in single.itertuples(index=False):
             if r.planet:
-                by_stage.setdefault(self.stage_of(r.mesh), []).append((r.start, r.end,
-                                                                        r.planet))
+                by_stage.setdefault(stage[r.mesh], []).append((r.start, r.end, r.planet))
         for stage, eps in by_stage.items():
             label = f"{stage} (several planets)" if stage else "several planets"
             # one pass over the episodes' ends in time order, counting each planet's open
