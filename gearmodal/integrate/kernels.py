@@ -16,8 +16,12 @@ import numpy as np
 #: a receding gap whose Hermite interpolant comes this close to contact (relative to the
 #: change of the gap over the piece) is examined for a hidden brief contact (both propagators)
 GRAZE_MARGIN = 0.25
-#: crossings closer than this fraction of dt are switched together (symmetric planets; the
-#: expm propagator, which steps by dt: the Taylor integrator has its own, on its time scale)
+#: crossings closer than this fraction of the propagator's time unit are switched together
+#: (symmetric planets, a flank opening as its back flank closes); the same window applies time
+#: events due at a piece's end. The unit: dt for the expm propagator, which steps by it; for
+#: the Taylor propagator the system's own time scale (the piece length of the bound over
+#: every state, ``REACH / rho``, at most the call's span), so that its solution does not
+#: depend on the output step (a run at half the step takes the same pieces, bit for bit)
 SIMULTANEOUS = 1e-13
 
 

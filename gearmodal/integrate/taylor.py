@@ -40,7 +40,7 @@ import numba
 import numpy as np
 
 from ..errors import ModelError
-from .kernels import GRAZE_MARGIN, _bisect_up
+from .kernels import GRAZE_MARGIN, SIMULTANEOUS, _bisect_up
 from .kernels import _poly as _hpoly
 
 #: rho * (piece length) at most this: every modal component turns by at most 6 rad per piece.
@@ -78,13 +78,6 @@ LAZY = 2
 DENSE = 0.25
 #: resolution of the per-piece term count (fractions of the reach)
 TERM_BINS = 64
-#: crossings closer than this fraction of the longest piece over every state (``REACH / rho``,
-#: the system's own time scale; at most the call's span) are switched together (symmetric
-#: planets, a flank opening as its back flank closes); the same window applies time events due
-#: at a piece's end. On the system's time scale and not the output step's, so that the
-#: solution does not depend on the output step (a run at half the step takes the same pieces,
-#: bit for bit)
-SIMULTANEOUS = 1e-13
 #: numba fast-math flags of the small dense loops: reassociation (vectorised sums and maxima)
 #: but no "no NaN / no inf" assumption, so that a non-finite state is still seen as such
 FAST = {"reassoc", "nsz", "arcp", "contract"}
@@ -1309,7 +1302,6 @@ class TaylorIntegrator:
         self.n_terms = int(self.terms[-1])  # the full count, last in the table
         self.tscale = TERM_BINS * self.rho / reach
         self.h_max = reach / self.rho
-        self.h_all = self.h_max  # the system's time scale (the tie window's unit)
         self.MinvU = np.ascontiguousarray(system.MinvU)
         if system.turning:
             pr, GT = system.periodic, system.GT
@@ -1340,9 +1332,10 @@ class TaylorIntegrator:
         k, n_ev = 0, 0
         counts = np.zeros(4, dtype=np.int64)
         met = int((self.state_bound.keys >= 0).sum())  # states bounded before this run
-        # the tie window: on the system's time scale, at most the call's span (a system with
-        # no stiffness has rho = 0: its time scale is unbounded)
-        tie = SIMULTANEOUS * min(self.h_all, n_steps * self.dt)
+        # the tie window (kernels.SIMULTANEOUS): on the system's time scale, the piece length
+        # of the bound over every state, at most the call's span (a system with no stiffness
+        # has rho = 0: its time scale is unbounded)
+        tie = SIMULTANEOUS * min(self.h_max, n_steps * self.dt)
         status, k, n_ev, contact, EV = taylor_run(
             self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
             sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,

@@ -353,6 +353,11 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     stats: dict = {"n_rebases": 0}
     prev = ld_next = None
     az_grid = np.zeros(n_steps + 1)  # reference input azimuth (with the mounting) at each step
+    # the output times from an aerodynamic step's start, and the fraction of the step, j / m:
+    # at half the output step the shared times get the same load and azimuth to the bit (not
+    # (t + tau) - t, rounded with t), so the exact method's solution does not depend on it
+    tau = dt * np.arange(m_sub + 1)
+    frac = np.arange(m_sub + 1) / m_sub
     for k in range(n_aero):
         t = k * aero_dt
         psi = psi_f + om_f * (t - t_f) + x[i_rot]
@@ -376,12 +381,6 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         rows.append((t, om / RPM, math.degrees(psi) % 360.0, on, tg, tg * w_gen,
                      *(ld[c] for c in LOAD_COLUMNS), fy, fz))
         # -- loads on the gearbox over this aerodynamic step (held or extrapolated)
-        # the output times from the step's start, and the fraction of the step, j / m_sub:
-        # at half the output step the shared times get the same load and azimuth to the bit
-        # (not (t + tau) - t, rounded with t), so the exact method's solution does not depend
-        # on the output step
-        tau = dt * np.arange(m_sub + 1)
-        frac = np.arange(m_sub + 1) / m_sub
         u_now = np.array([ld["torque_Nm"], fy, fz])
         if aero_hold == "interpolate":
             u_next = np.array([ld_next["torque_Nm"], *turbine.rear_force(ld_next)])
