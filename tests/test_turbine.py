@@ -124,15 +124,27 @@ def test_turbulence_is_seeded_and_sampled():
         Wind(turbulence_intensity=2.0)
 
 
-def test_turbulence_box_does_not_depend_on_the_blas_threads():
+def test_turbulence_box_does_not_depend_on_the_blas_threads(monkeypatch):
     """The scene's box (30 s, 10 m/s, TI 0.12, seed 1) is the same to the bit whatever the
     BLAS thread count the user runs with: made with two threads, PyConTurb's products rounded
     differently (3.6e-15 m/s), and the clearance gearbox's rattle turned that into a
-    different run (146.8 against 144.0 kN tooth peak on the 500 Hz rung)."""
-    from threadpoolctl import threadpool_limits
+    different run (146.8 against 144.0 kN tooth peak on the 500 Hz rung). PyConTurb runs with
+    one BLAS thread even when the user allows two (checked directly too: on a one-core
+    machine two threads may not round differently)."""
+    import pyconturb
+    from threadpoolctl import threadpool_info, threadpool_limits
 
     from gearmodal.turbine import wind as wind_mod
 
+    seen = []
+    gen_turb = pyconturb.gen_turb
+
+    def spy(*args, **kwargs):
+        seen.append(max(p["num_threads"] for p in threadpool_info()
+                        if p["user_api"] == "blas"))
+        return gen_turb(*args, **kwargs)
+
+    monkeypatch.setattr(pyconturb, "gen_turb", spy)
     kw = dict(mean_speed=10.0, turbulence_intensity=0.12, seed=1, duration=30.0)
     boxes = []
     for threads in (1, 2):
@@ -140,6 +152,7 @@ def test_turbulence_box_does_not_depend_on_the_blas_threads():
             wind_mod._BOXES.clear()
             boxes.append(Wind(**kw)._turbulence()[3])
     np.testing.assert_array_equal(boxes[0], boxes[1])
+    assert seen == [1, 1]
 
 
 def test_turbulence_box_is_pyconturbs_frequency_by_frequency(monkeypatch):
