@@ -20,7 +20,7 @@ from .coupling import (
     System,
 )
 from .errors import ModelError
-from .integrate import SimulationResult, simulate
+from .integrate import Harmonic, SimulationResult, simulate
 from .modal import ModalResult, modal
 from .model import (
     DOF_LEVELS,
@@ -51,7 +51,7 @@ __version__ = "0.1.0"
 __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Constraint", "Coupled",
            "CoupledAssembly", "Equilibrium", "FidelityChoice", "Frame", "Joint", "LinearConstraint",
            "LinearSystem", "ModelSystem", "System",
-           "Gear", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
+           "Gear", "Harmonic", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
            "SimulationResult", "simulate",
            "assemble", "balance", "campbell", "choose_fidelity", "drivetrain", "equilibrium",
            "gear_pair",

@@ -57,6 +57,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import ModelError
+from .integrate.loads import Harmonic
 from .model import validate as v
 from .model.model import Model
 from .model.schema import REQUIRED, Field, Table
@@ -247,19 +248,11 @@ class Scene:
 
 
 @dataclass(frozen=True)
-class Wave:
-    """A load ``mean + amplitude sin(2 pi frequency_hz t + phase)`` (N or N m; ``phase`` in
-    rad), callable of time in s. A plain object, so a scene with waves pickles (sweeps on a
-    process pool, the fingerprint of :func:`gearmodal.auto.choose`'s store)."""
-
-    mean: float
-    amplitude: float
-    frequency_hz: float
-    phase: float
-
-    def __call__(self, t):
-        return self.mean + self.amplitude * math.sin(2 * math.pi * self.frequency_hz * t
-                                                     + self.phase)
+class Wave(Harmonic):
+    """A scene's load ``mean + amplitude sin(2 pi frequency_hz t + phase)`` (N or N m;
+    ``phase`` in rad): a :class:`gearmodal.Harmonic`, which the exact method integrates
+    exactly. A plain object, so a scene with waves pickles (sweeps on a process pool, the
+    fingerprint of :func:`gearmodal.auto.choose`'s store)."""
 
 
 def _wave(field_: str, spec: dict):

@@ -26,6 +26,7 @@ from ..model import validate as v
 from ..model.model import Model
 from .azimuth import AzimuthAssembler
 from .driver import METHODS, Driver, Method, get_method
+from .loads import LOAD_DT, Harmonic, load_paths
 from .result import ELEMENT_COLUMNS, EVENT_COLUMNS, SimulationResult
 from .system import PiecewiseLinearSystem
 
@@ -34,36 +35,8 @@ _PANDAS_3 = int(pd.__version__.split(".")[0]) >= 3
 #: most output steps of a run (each a row of the result's tables)
 MAX_STEPS = 5e7
 
-__all__ = ["METHODS", "Driver", "Method", "SimulationResult", "build_result", "event_array",
-           "get_method", "reconcile", "simulate"]
-
-
-def _load_grid(asm: Assembly, loads, t: np.ndarray) -> np.ndarray:
-    """Load values (n_times, n_loads) on the time grid from constants, callables of time or
-    pandas Series indexed by time (linear interpolation, ends held)."""
-    U = np.zeros((len(t), len(asm.load_names)))
-    for name, val in (loads or {}).items():
-        if name not in asm.load_names:
-            raise ModelError(f"loads.{name}", "no such load; available: "
-                             + ", ".join(asm.load_names))
-        j = asm.load_names.index(name)
-        if isinstance(val, pd.Series):
-            idx = np.asarray(val.index, dtype=float)
-            if len(idx) < 1 or np.any(np.diff(idx) <= 0):
-                raise ModelError(f"loads.{name}", "a Series must be indexed by increasing time")
-            U[:, j] = np.interp(t, idx, val.to_numpy(dtype=float))
-        elif callable(val):
-            U[:, j] = [float(val(tt)) for tt in t]
-        else:
-            try:
-                U[:, j] = float(val)
-            except (TypeError, ValueError):
-                raise ModelError(f"loads.{name}", f"= {val!r}: expected a number (N or N m), a "
-                                 "callable of time or a pandas Series") from None
-        if not np.all(np.isfinite(U[:, j])):
-            raise ModelError(f"loads.{name}", "has non-finite values")
-        v.plausible(f"loads.{name}", float(np.abs(U[:, j]).max(initial=0.0)), "load")
-    return U
+__all__ = ["LOAD_DT", "METHODS", "Driver", "Harmonic", "Method", "SimulationResult",
+           "build_result", "event_array", "get_method", "reconcile", "simulate"]
 
 
 def _initial(asm: Assembly, values, label: str) -> np.ndarray:
@@ -102,17 +75,21 @@ def rotating_geometry(model: Model) -> bool:
 
 def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
              q0: dict | None = None, v0: dict | None = None, method: str = "exact",
-             speed_rpm: float = 0.0, **options) -> SimulationResult:
+             speed_rpm: float = 0.0, load_dt: float = LOAD_DT, **options) -> SimulationResult:
     """Simulate the nonlinear contact dynamics of ``model`` from 0 to ``t_end`` (s).
 
     Parameters
     ----------
     model : :class:`gearmodal.Model` (or an :class:`Assembly`).
-    t_end : end time, s. dt : propagation and output step, s (the exact method detects every
-        state change inside a step regardless of ``dt``).
-    loads : ``{load name: value}`` with a constant, a callable of time or a pandas Series
-        indexed by time (linear in between); N or N m. A load is fixed in its body's axes; a
-        body turning against the ground carries it round.
+    t_end : end time, s. dt : output step, s: it places the output rows; the exact method's
+        solution does not depend on it (every state change inside a step is found, the loads
+        keep their own time structure); for ``"newmark"`` it is the integration step too.
+    loads : ``{load name: value}``, N or N m, each a constant, a :class:`gm.Harmonic
+        <gearmodal.integrate.loads.Harmonic>` (integrated exactly by the exact method), a
+        pandas Series indexed by time (linear between its own knots, ends held) or any other
+        callable of time (sampled every ``load_dt``, linear in between). A load is fixed in
+        its body's axes; a body turning against the ground carries it round.
+    load_dt : sampling step of callable loads, s (default 1e-4 s, whatever ``dt`` is).
     q0, v0 : initial displacements and velocities by DOF name (others 0). The initial contact
         state follows from ``q0`` (a contact is closed when it penetrates).
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``.
@@ -149,6 +126,9 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     v.plausible("speed_rpm", float(speed_rpm), "speed_rpm")
     v.plausible("t_end", float(t_end), "time")
     v.plausible("dt", float(dt), "time")
+    if not isinstance(load_dt, (int, float)) or isinstance(load_dt, bool) \
+            or not math.isfinite(load_dt) or load_dt <= 0:
+        raise ModelError("load_dt", f"= {load_dt!r}: must be a finite number > 0 s")
     if dt > t_end:
         raise ModelError("dt", f"= {dt!r}: must be at most t_end = {t_end!r} s (the run would "
                          f"end at {dt!r} s)")
@@ -188,28 +168,37 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         x = np.concatenate([_initial_coupled(casm, q0, "q0"), _initial_coupled(casm, v0, "v0")])
     s = system.penetration(x) > 0
     s_init = s.copy()
-    U = _load_grid(asm, loads, t)
+    # the loads on their own time structure (constants, knots, harmonics), as values of the
+    # load map's columns (fixed in their bodies' axes: a turning map carries them round)
+    paths = load_paths(asm.load_names, loads, float(n_steps * dt), float(load_dt))
+    used = paths.used()
+    part = paths.columns(used)
     if system.turning:
         # loads fixed in their bodies' axes, the load map turning: load values, not forces
-        used = [j for j in range(U.shape[1]) if np.any(U[:, j])]
         system.use_loads(used)
-        F = np.column_stack([U[:, used], np.ones(len(t))])
+        F = np.tile(np.append(part.constant, 1.0), (n_steps + 1, 1))  # the last: f_const
+        basis = np.eye(len(used) + 1, len(used))
     else:
-        F = U @ asm.B.T + system.f_const[None, :]
+        basis = asm.B[:, used]
+        F = np.tile(basis @ part.constant + system.f_const, (n_steps + 1, 1))
+    timed = None
+    if part.time_varying:  # knots and harmonics acting through the force rows ``basis``
+        timed = (part.knot_t, part.knot_u, part.harmonic_u, part.harmonic_nu, basis)
     run = Driver(method, dt, x, s, **options)
-    run.advance(system, n_steps, F, azimuth0=0.0)
+    run.advance(system, n_steps, F, azimuth0=0.0, loads=timed)
     X, S, events = run.arrays()
     stats = {**run.stats, "cpu_s": time.process_time() - cpu, "n_events": len(events),
              "n_steps": n_steps}
     result = build_result([tuple(sg) for sg in run.segments], t, X, S, events, s_init, stats,
                      mesh_stiffness(system, omega * t),
                      {"model": name, "method": method, "t_end": t_end, "dt": dt,
-                      "speed_rpm": speed_rpm, "options": options,
+                      "speed_rpm": speed_rpm, "load_dt": load_dt, "options": options,
                       "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
                                 for k, v in (loads or {}).items()},
                       "q0": q0 or {}, "v0": v0 or {}})
     if casm is not None:
-        _expand_coupled(result, model, casm, [(0, n_steps, system, casm, U)], X, S, speed_rpm)
+        _expand_coupled(result, model, casm, [(0, n_steps, system, casm, paths.values(t))], X,
+                        S, speed_rpm)
     return result
 
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import ModelError
 from .exact import run_exact
+from .loads import force_at
 from .newmark import run_newmark
 from .scipy_ref import run_scipy
 from .system import PiecewiseLinearSystem
@@ -24,16 +25,27 @@ from .system import PiecewiseLinearSystem
 
 class Method:
     """An integration method: ``run(system, dt, n_steps, F, x0, s0, azimuth0=0.0,
-    **options)`` returns ``(X, S, events, stats)`` (states and contact states at the
-    ``n_steps + 1`` output times, events as rows or tuples, counters); ``options`` are the
-    names it takes."""
+    loads=None, **options)`` returns ``(X, S, events, stats)`` (states and contact states at
+    the ``n_steps + 1`` output times, events as rows or tuples, counters); ``options`` are the
+    names it takes. ``loads``: ``(knot_t, knot_u, harmonic_u, harmonic_nu, basis)``, loads on
+    their own time structure added to the grid ``F`` (:func:`~gearmodal.integrate.loads.force_at`);
+    a method that takes them (``takes_loads``) follows them between output times, the others
+    get them folded into ``F`` at the output times (Newmark: its steps)."""
 
     name = ""
     options: tuple[str, ...] = ()
+    takes_loads = False
     _run = None
 
     def run(self, system: PiecewiseLinearSystem, dt: float, n_steps: int, F: np.ndarray,
-            x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0, **options):
+            x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0, loads=None, **options):
+        if loads is None:
+            return type(self)._run(system, dt, n_steps, F, x0, s0, azimuth0=azimuth0,
+                                   **options)
+        if self.takes_loads:
+            return type(self)._run(system, dt, n_steps, F, x0, s0, azimuth0=azimuth0,
+                                   loads=loads, **options)
+        F = F + force_at(loads, np.arange(n_steps + 1) * dt)
         return type(self)._run(system, dt, n_steps, F, x0, s0, azimuth0=azimuth0, **options)
 
     def check(self, options: dict) -> None:
@@ -50,6 +62,7 @@ class Exact(Method):
 
     name = "exact"
     options = ("max_events_per_step", "propagator")
+    takes_loads = True
     _run = staticmethod(run_exact)
 
 
@@ -66,6 +79,7 @@ class Scipy(Method):
 
     name = "scipy"
     options = ("scipy_method", "rtol", "atol", "max_events", "max_step", "first_step")
+    takes_loads = True
     _run = staticmethod(run_scipy)
 
 
@@ -115,11 +129,12 @@ class Driver:
         self._X = self._S = None
 
     def advance(self, system: PiecewiseLinearSystem, n_steps: int, F: np.ndarray,
-                azimuth0: float = 0.0) -> None:
+                azimuth0: float = 0.0, loads=None) -> None:
         """Advance ``n_steps`` output steps with ``system`` and the force grid ``F``
-        (``n_steps + 1`` rows), the input azimuth ``azimuth0`` (rad) at the first."""
+        (``n_steps + 1`` rows), the input azimuth ``azimuth0`` (rad) at the first; ``loads``
+        (times from this call's start) as :class:`Method`."""
         X, S, ev, st = self.method.run(system, self.dt, n_steps, F, self.x, self.s,
-                                       azimuth0=azimuth0, **self.options)
+                                       azimuth0=azimuth0, loads=loads, **self.options)
         ev = np.array(ev, dtype=float).reshape(-1, 6)
         ev[:, 0] += self.k * self.dt
         self._events.append(ev)

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import ModelError
 from .kernels import GRAZE_MARGIN, SIMULTANEOUS, advance_state, fast_steps
+from .loads import force_at
 from .system import TAYLOR_TERMS, PiecewiseLinearSystem, Propagators
 from .taylor import TaylorIntegrator
 
@@ -126,7 +127,7 @@ def _check_finite(X: np.ndarray, dt: float) -> None:
 
 def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
               x0: np.ndarray, s0: np.ndarray, max_events_per_step: int = 200,
-              propagator: str = "taylor", azimuth0: float = 0.0):
+              propagator: str = "taylor", azimuth0: float = 0.0, loads=None):
     """Integrate ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
 
     ``F_grid`` (n_steps + 1, n) is the generalised force at the output times (linear in
@@ -146,6 +147,11 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     ``azimuth0``: input azimuth at the start, rad; with alternating mesh stiffness
     (``Mesh.alternation``) the Taylor propagator switches each flank's stiffness at its
     scheduled times exactly (time events); ``"expm"`` does not support it.
+
+    ``loads``: forces on their own time structure (:class:`~gearmodal.integrate.driver.Method`),
+    which the Taylor propagator follows exactly (pieces end at their knots, harmonics are in
+    every piece's series); ``"expm"`` holds them linear over each output step (sampled at the
+    output times: its solution then depends on ``dt``).
     """
     system.asm.require_piecewise_linear("method='exact'")
     if propagator not in PROPAGATORS:
@@ -167,9 +173,12 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     if integ is None:
         kind = TaylorIntegrator if propagator == "taylor" else ExactIntegrator
         integ = cache[key] = kind(system, dt, max_events_per_step)
+    if loads is not None and propagator != "taylor":
+        F_grid = F_grid + force_at(loads, np.arange(n_steps + 1) * dt)
+        loads = None
     F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))  # input basis, if any
     if propagator == "taylor":
-        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0)
+        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0, loads)
         _check_finite(X, dt)
         return X, S, events, {"exponentials": 0, **integ.counts}
     prop = integ.prop

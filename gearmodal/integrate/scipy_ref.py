@@ -26,6 +26,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..errors import ModelError
+from .loads import force_at
 from .system import PiecewiseLinearSystem
 
 #: crossings within this fraction of ``dt`` of a located event (and at least within the event
@@ -37,7 +38,7 @@ TIE = 1e-9
 def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
               x0: np.ndarray, s0: np.ndarray, scipy_method: str = "RK45", rtol: float = 1e-6,
               atol: float = 1e-12, max_events: int = 10_000_000, azimuth0: float = 0.0,
-              **options):
+              loads=None, **options):
     n = system.n
     turning = system.turning
     if turning and system.asm.round is not None:
@@ -77,6 +78,8 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             k = min(int(ti / dt), n_steps - 1)
             w = ti / dt - k
             u = F_grid[k] * (1 - w) + F_grid[k + 1] * w
+            if loads is not None:  # loads on their own time structure, at this instant
+                u = u + force_at(loads, ti)[0]
             if turning:  # the time-varying system at this instant's azimuth
                 A, f = system.first_order(s, ks, system.at(azimuth(ti)))
             F = system.generalized_force(u, azimuth(ti)) + f

@@ -136,14 +136,15 @@ def _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _coefficients_frozen(MKC, g0, g1, q, v, h, B, y):
+def _coefficients_frozen(MKC, g0, g1, q, v, h, B, y, HF, harmonic):
     """:func:`_coefficients` of a system that does not turn (no harmonics): (T1) alone. Its
     loop is the frozen part of :func:`_coefficients` written out again on purpose: a helper
     shared per term takes and drops an atomic reference count on each of its arrays every
     term (12-14 % of the planetary stage's event-dense run, measured), and the turning
     function called for a frozen run costs 8 % on that run (2.72 against 2.50 ms). Both are
     checked against closed forms (frozen: tests/validation/test_exactness.py; turning:
-    tests/validation/test_rotating_geometry.py)."""
+    tests/validation/test_rotating_geometry.py). ``HF`` (n_terms, n): the scaled Taylor rows
+    ``g_k h^k`` of the harmonic loads (:func:`_harmonic_rows`), added where ``harmonic``."""
     n_terms, n = B.shape
     n2 = n - n % 2
     width = MKC.shape[1]
@@ -178,11 +179,14 @@ def _coefficients_frozen(MKC, g0, g1, q, v, h, B, y):
         elif k == 1:
             for i in range(n):
                 B[3, i] += g1[i] * h2 * h * den
+        if harmonic:
+            for i in range(n):
+                B[k + 2, i] += HF[k, i] * h2 * den
 
 
 @numba.njit(cache=True, fastmath=True)
 def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC, Y, Yd, Bt,
-                  TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads):
+                  TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads, HF, harmonic):
     """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions: the frozen part by (T1) with
     the forcing terms ``g0`` (the force at the piece's start) and ``g1`` (its rate), one
     contiguous product per term with ``MKC = [M^-1 K_s, M^-1 C_s, Z]`` (``y``: scratch of its
@@ -201,7 +205,8 @@ def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC
     ``Y``, ``Yd`` (H1, n_terms, nT) complex and ``FT`` are scratch; ``GV``, ``GVS`` (H1, n) the
     turning loads ``M^-1 Z_h u`` at the piece's start and their rates. ``Y``, ``Yd`` hold
     real and imaginary parts in their first axis (2, H1, n_terms, nT) and ``Bt`` (n_terms, nT)
-    the turning coordinates' rows of ``B``: real, contiguous sums that vectorise."""
+    the turning coordinates' rows of ``B``: real, contiguous sums that vectorise. ``HF`` as
+    :func:`_coefficients_frozen` (the harmonic loads, their turning products included)."""
     n_terms, n = B.shape
     n2 = n - n % 2
     width = MKC.shape[1]  # 2 n, or more with the turning columns
@@ -310,6 +315,9 @@ def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC
         elif k == 1:
             for i in range(n):
                 B[3, i] += g1[i] * h2 * h * den
+        if harmonic:
+            for i in range(n):
+                B[k + 2, i] += HF[k, i] * h2 * den
         if loads:
             for hh in range(1, H1):
                 if k > EL[hh]:
@@ -610,6 +618,25 @@ def _stretch(F, k, n_steps):
     return k2
 
 
+@numba.njit(cache=True)
+def _harmonic_rows(HX, HNU, t, h, nt, HF):
+    """Scaled Taylor rows ``HF[k] = g_k h^k`` (k < ``nt``) at time ``t`` of the harmonic loads
+    ``g(t) = Re sum_j HX_j exp(i HNU_j t)`` (``M^-1`` times the load, (nh, n) complex):
+    ``g_k h^k = Re sum_j HX_j exp(i HNU_j t) (i HNU_j h)^k / k!`` (T1's ``g_k`` of a load that
+    is a harmonic, carried exactly as the turning geometry is)."""
+    n = HX.shape[1]
+    for k in range(nt):
+        for i in range(n):
+            HF[k, i] = 0.0
+    for j in range(HX.shape[0]):
+        z = complex(math.cos(HNU[j] * t), math.sin(HNU[j] * t))
+        step = 1j * HNU[j] * h
+        for k in range(nt):
+            for i in range(n):
+                HF[k, i] += (HX[j, i] * z).real
+            z = z * step / (k + 1.0)
+
+
 @numba.njit(cache=True, inline="always")
 def _write(X, S, j, q, v, s):
     """Output row ``j``: the state ``(q, v)`` and the contact state ``s``."""
@@ -627,7 +654,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                terms, tscale, margin, simultaneous, max_events, X, S, EV, n_ev,
                counts, sched_t, sched_e, sched_k, sched_pos,
                om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT,
-               reach, per_state, Ksym, Wl, km, c0, kappa, rho_keys, rho_vals):
+               reach, per_state, Ksym, Wl, km, c0, kappa, rho_keys, rho_vals, TL, FL, MinvUL,
+               GTL, HX, HNU):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -656,6 +684,15 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     contacts' rows are zero in ``W``, ``U`` and ``off``: their gaps come from their series) and
     ``GT`` (H1, n, m) the turning harmonics of ``M^-1`` times the load columns of ``F``. Each
     piece is then summed by (T2) of :func:`_coefficients`.
+
+    Loads on their own time structure, added to ``F`` (so that the output step only places
+    rows): ``TL`` (nk,) knot times from step 0 (none, or the first at or before 0 and the last
+    at or after the run's end) and ``FL`` (nk, mL) the load values there, linear in between (a
+    load series on its knots, a callable on its load step), acting through ``MinvUL`` (n, mL)
+    and, turning, ``GTL`` (H1, n, mL) as ``F`` through ``MinvU`` and ``GT``: a piece ends at
+    every knot, as at a time event; ``HX`` (nh, n) complex and ``HNU`` (nh,) rad/s the harmonic
+    loads ``M^-1 F = Re sum_j HX_j exp(i HNU_j t)``, summed into every piece's series
+    (:func:`_harmonic_rows`).
     """
     N = x.shape[0]
     n = N // 2
@@ -730,6 +767,20 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     VA = np.zeros((H1, n), dtype=np.complex128)
     VS = np.zeros((H1, n), dtype=np.complex128)
     GV = np.zeros((H1, n), dtype=np.complex128)
+    # loads on their own knots (TL, FL) and harmonic loads (HX, HNU)
+    nk = TL.shape[0]
+    il = 0  # the knot interval [TL[il], TL[il + 1]] holding t
+    knots_due = nk > 0  # its terms to compute
+    tL0 = 0.0
+    gLa = np.zeros(n)
+    gLs = np.zeros(n)
+    VLa = np.zeros((H1, n), dtype=np.complex128)
+    VLs = np.zeros((H1, n), dtype=np.complex128)
+    VST = np.zeros((H1, n), dtype=np.complex128)
+    loads_knots = False
+    gR = np.empty(n)  # the force's rate over the piece (grid and knots)
+    harmonic = HX.shape[0] > 0
+    HF = np.zeros((n_terms, n))
     _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
     toggled = 0
     dense = False
@@ -803,6 +854,39 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 h = 0.5 * remaining  # no sliver before the output time
             if ip < n_sched and sched_t[ip] < t + h:
                 h = sched_t[ip] - t  # the piece ends at the next time event
+            if nk > 0:
+                # the load knots passed by now: the force's line from the knot at or before t
+                while il + 2 < nk and TL[il + 1] <= t + simultaneous:
+                    il += 1
+                    knots_due = True
+                if knots_due:
+                    tL0 = TL[il]
+                    span_l = TL[il + 1] - TL[il] if nk > 1 else 1.0
+                    for i in range(n):
+                        a0 = 0.0
+                        a1 = 0.0
+                        for j in range(FL.shape[1]):
+                            a0 += MinvUL[i, j] * FL[il, j]
+                            if nk > 1:
+                                a1 += MinvUL[i, j] * (FL[il + 1, j] - FL[il, j])
+                        gLa[i] = a0
+                        gLs[i] = a1 / span_l
+                    loads_knots = False
+                    for hh in range(1, H1):
+                        for i in range(n):
+                            z0 = 0j
+                            z1 = 0j
+                            for j in range(FL.shape[1]):
+                                z0 += GTL[hh, i, j] * FL[il, j]
+                                if nk > 1:
+                                    z1 += GTL[hh, i, j] * (FL[il + 1, j] - FL[il, j])
+                            VLa[hh, i] = z0
+                            VLs[hh, i] = z1 / span_l
+                            if z0 != 0.0 or z1 != 0.0:
+                                loads_knots = True
+                    knots_due = False
+                if il + 2 < nk and t + simultaneous < TL[il + 1] < t + h:
+                    h = TL[il + 1] - t  # the piece ends at the next load knot
             # as many terms as the piece's own reach rho h needs (a short piece before an
             # output time or after an event needs fewer)
             j = int(math.ceil(h * tscale))
@@ -813,6 +897,11 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             work = work_flat[:(DEPTH + 5) * nt].reshape((DEPTH + 5, nt))
             for i in range(n):
                 g0[i] = acc[i] + gF[i] + gS[i] * (t - tk)
+                gR[i] = gS[i]
+            if nk > 0:
+                for i in range(n):
+                    g0[i] += gLa[i] + gLs[i] * (t - tL0)
+                    gR[i] += gLs[i]
             if turning:
                 for e in range(nTC):
                     kt[e] = kc[tc_idx[e]]
@@ -821,6 +910,10 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 for hh in range(H1):
                     for i in range(n):
                         GV[hh, i] = VA[hh, i] + VS[hh, i] * (t - tk)
+                        VST[hh, i] = VS[hh, i]
+                        if nk > 0:
+                            GV[hh, i] += VLa[hh, i] + VLs[hh, i] * (t - tL0)
+                            VST[hh, i] += VLs[hh, i]
             counts[0] += 1
             while True:
                 counts[3] += nt
@@ -848,12 +941,17 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                             OFS[e, kk] = a
                 # (whole arrays, the first nt terms used: contiguous, no strided views; a
                 # system that does not turn has no harmonics, its loops are empty)
+                if harmonic:
+                    _harmonic_rows(HX, HNU, t, h, nt, HF)
                 if turning:
-                    _coefficients(MKC, g0, gS, q, v, h, Bv, ysc, E, EL, tcols, krows, urows, ZK,
-                                  ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, VS,
-                                  cturn, loads)
+                    turning_loads = loads
+                    if loads_knots:
+                        turning_loads = True
+                    _coefficients(MKC, g0, gR, q, v, h, Bv, ysc, E, EL, tcols, krows, urows, ZK,
+                                  ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, VST,
+                                  cturn, turning_loads, HF, harmonic)
                 else:
-                    _coefficients_frozen(MKC, g0, gS, q, v, h, Bv, ysc)
+                    _coefficients_frozen(MKC, g0, gR, q, v, h, Bv, ysc, HF, harmonic)
                 if _converged(Bv, TAIL):
                     break
                 counts[1] += 1
@@ -961,6 +1059,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 t = t_end if h == remaining else t + h
                 if ip < n_sched and sched_t[ip] - t < simultaneous:
                     t = max(t, sched_t[ip])  # exactly at the time event
+                if il + 2 < nk and TL[il + 1] - t < simultaneous:
+                    t = max(t, TL[il + 1])  # exactly at the load knot
                 # the output times this piece passed: from its series (its end: the end state)
                 while jn <= k2 and jn * dt < t - 1e-13 * dt:
                     _evaluate(Bv, (jn * dt - t_old) / h, h, qo, vo)
@@ -1315,11 +1415,13 @@ class TaylorIntegrator:
                         pr.TOFF, pr.TU, np.ascontiguousarray(GT))
 
     def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray,
-            azimuth0: float = 0.0):
+            azimuth0: float = 0.0, loads=None):
         """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`); the input
         azimuth at the start is ``azimuth0`` (rad: alternating mesh stiffness, turning
-        geometry)."""
+        geometry); ``loads``: ``(knot_t, knot_u, harmonic_u, harmonic_nu, basis)`` added to
+        ``F`` (:meth:`_loads`)."""
         sysm = self.sys
+        TL, FL, MinvUL, GTL, HX, HNU = self._loads(loads, azimuth0)
         kc = np.array(sysm.stiffness_at(azimuth0), dtype=float)  # changed in place by events
         sched = sysm.schedule(azimuth0, n_steps * self.dt)
         sched_pos = np.zeros(1, dtype=np.int64)
@@ -1341,7 +1443,7 @@ class TaylorIntegrator:
             sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
             self.terms, self.tscale, GRAZE_MARGIN, tie, self.max_events, X, S, EV, n_ev,
             counts, *sched, sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
-            *self.state_bound.args())
+            *self.state_bound.args(), TL, FL, MinvUL, GTL, HX, HNU)
         if status != 0:
             raise ModelError(
                 "max_events_per_step",
@@ -1354,3 +1456,42 @@ class TaylorIntegrator:
                        "root_searches": int(counts[2]), "taylor_rows": int(counts[3]),
                        "state_bounds": int((self.state_bound.keys >= 0).sum()) - met}
         return X, S, events
+
+    def _loads(self, loads, azimuth0: float):
+        """The kernel's load arrays ``TL, FL, MinvUL, GTL, HX, HNU`` from ``(knot_t, knot_u,
+        harmonic_u, harmonic_nu, basis)`` (:class:`~gearmodal.integrate.driver.Method`; empty
+        arrays for ``None``): load values acting through ``M^-1`` times the force rows
+        ``basis`` (mF, mL) of the force grid's basis; a harmonic ``Re(u e^(i nu t))`` of them
+        acts through that and, on a turning load map, through each turning harmonic ``h`` of
+        it at ``h omega +- nu``."""
+        sysm = self.sys
+        n = sysm.n
+        H1 = self.turning[-1].shape[0]
+        if loads is None:
+            return (np.empty(0), np.empty((0, 0)), np.empty((n, 0)),
+                    np.empty((H1, n, 0), dtype=complex), np.empty((0, n), dtype=complex),
+                    np.empty(0))
+        kt, ku, hu, hnu, basis = loads
+        # the load columns' force rows in the integrator's basis (reduce: an input basis)
+        rows = sysm.reduce(np.ascontiguousarray(np.asarray(basis, dtype=float).T))  # (mL, m)
+        MinvUL = np.ascontiguousarray(self.MinvU @ rows.T)
+        harm, GT = self.turning[0], self.turning[-1]
+        GTL = (np.ascontiguousarray(np.einsum("hij,lj->hil", GT, rows)) if sysm.turning
+               else np.zeros((H1, n, rows.shape[0]), dtype=complex))
+        HX, HNU = [], []
+        for u, nu in zip(np.asarray(hu, dtype=complex), np.asarray(hnu, dtype=float),
+                         strict=True):
+            HX.append(MinvUL @ u)
+            HNU.append(nu)
+            for hh in range(1, len(harm) if sysm.turning else 0):
+                rot = np.exp(1j * harm[hh] * azimuth0) / 2
+                for amp, f in ((u, nu), (np.conj(u), -nu)):
+                    x = (GTL[hh] @ amp) * rot
+                    if np.any(x != 0):
+                        HX.append(x)
+                        HNU.append(harm[hh] * sysm.omega + f)
+        HX = (np.ascontiguousarray(np.array(HX)) if HX
+              else np.empty((0, n), dtype=complex))
+        FL = np.ascontiguousarray(ku, dtype=float) if len(kt) else np.empty((0, rows.shape[0]))
+        return (np.ascontiguousarray(kt, dtype=float), FL, MinvUL, GTL, HX,
+                np.array(HNU, dtype=float))
