@@ -217,7 +217,9 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
       ``planet_bearing_revolutions`` and ``planet_bearing_peq_N`` of that bearing (what a
       lifetime sum needs);
     - ``del_rotor_torque_Nm`` (exponent of the tooth root), ``mean_power_W``,
-      ``max_front_force_N``, ``p99_tooth_force_N`` and ``p99_planet_bearing_force_N`` (99th
+      ``max_front_force_N`` (the exact maximum of the solution,
+      :meth:`~gearmodal.SimulationResult.peaks`, where the run has it and ``t_skip`` is on its
+      peak bins), ``p99_tooth_force_N`` and ``p99_planet_bearing_force_N`` (99th
       percentiles over the output times), ``duration_s`` (the time counted).
 
     With ``tables`` the dict holds ``"tables"``: ``spectra``, the LDD (time) and LRD (rotor
@@ -263,7 +265,7 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
            "planet_bearing_peq_N": life[short]["equivalent_load_N"],
            "planet_bearing_revolutions": revs,
            "del_rotor_torque_Nm": damage_equivalent_load(torque, ex["tooth_root"], n_ref),
-           "max_front_force_N": float(teeth.max()),
+           "max_front_force_N": float(sim.peaks(t_skip)["peak_force_N"][flanks].max()),
            "p99_tooth_force_N": float(np.percentile(teeth, 99.0)),
            "p99_planet_bearing_force_N": float(np.percentile(radial[worst], 99.0)),
            "mean_power_W": float(tur["power_W"][tur.index >= t_skip].mean())}

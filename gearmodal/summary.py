@@ -8,7 +8,6 @@ import math
 from collections.abc import Iterable
 
 import numpy as np
-import pandas as pd
 
 from .errors import ModelError
 
@@ -41,7 +40,9 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
 
     ``result`` is a :class:`~gearmodal.SimulationResult` or a turbine run's
     :class:`~gearmodal.turbine.DrivetrainResult`. Forces are N and are the maxima over the
-    output times of the first planetary stage:
+    run of the first planetary stage: the exact maxima of the solution
+    (:meth:`~gearmodal.SimulationResult.peaks`: the exact method, never below a sampled
+    value, whatever the output step) where the run has them, else over the output times:
 
     - ``max_front_force_N`` / ``max_back_force_N``: the largest front / back flank force of
       ``planet`` on its sun-planet and ring-planet meshes (also given per mesh:
@@ -82,10 +83,11 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
     name = sim.stage_of(meshes["sun"][0])
     stage = f"{name}." if name else ""
     out: dict = {}
+    pk = sim.peaks()["peak_force_N"]
     for kind in ("sun", "ring"):
         m = meshes[kind][0]
-        out[f"max_front_force_{kind}_planet_N"] = float(f[f"{m}.front"].max())
-        out[f"max_back_force_{kind}_planet_N"] = float(f[f"{m}.back"].max())
+        out[f"max_front_force_{kind}_planet_N"] = float(pk[f"{m}.front"])
+        out[f"max_back_force_{kind}_planet_N"] = float(pk[f"{m}.back"])
     out["max_front_force_N"] = max(out["max_front_force_sun_planet_N"],
                                    out["max_front_force_ring_planet_N"])
     out["max_back_force_N"] = max(out["max_back_force_sun_planet_N"],
@@ -102,9 +104,8 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
                                                                  strict=True))
     bearings = sorted(b for b in sim.elements_of("planet_bearing") if sim.stage_of(b) == name
                       and f"{b}.x" in f.columns)
-    radial = pd.DataFrame({b: np.hypot(f[f"{b}.x"], f[f"{b}.y"]) for b in bearings},
-                          index=f.index)
-    out["max_planet_bearing_force_N"] = float(radial.to_numpy().max()) if bearings else math.nan
+    out["max_planet_bearing_force_N"] = (max(float(pk[f"{b}.radial"]) for b in bearings)
+                                         if bearings else math.nan)
     ls = sim.load_sharing()
     fac = ls[f"{stage}factor"] if f"{stage}factor" in ls else ls.filter(like="factor").iloc[:, 0]
     sp = [f"{m}.front" for m in sim.meshes("sun_planet") if sim.stage_of(m) == name]
@@ -132,7 +133,7 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
                 for side in ("front", "back")]
         forces = f[cols].copy()
         for b in bearings:
-            forces[f"{b}.radial"] = radial[b]
+            forces[f"{b}.radial"] = np.hypot(f[f"{b}.x"], f[f"{b}.y"])
         forces["load_sharing_factor"] = fac
         forces.index.name = "time"
         out["tables"] = {"events": sim.events.copy(), "forces": forces}

@@ -51,7 +51,9 @@ def test_simulate_scene_writes_events_forces_and_figures(tmp_path):
         assert (out / f).exists(), f
     ev = pd.read_csv(out / "events.csv")
     assert list(ev.columns) == ["time", "element", "contact", "state_before", "state_after",
-                                "gap_rate", "force_after"]
+                                "gap_rate", "force_after", "peak_force_N", "peak_time"]
+    ends = ev[ev.state_after == "open"]
+    assert ends.peak_force_N.notna().all() and ev[ev.state_after == "closed"].peak_time.isna().all()
     assert (ev.contact == "back").any()  # the clearance lets the back flanks touch
     dc = pd.read_csv(out / "double_contact.csv")
     assert len(dc) and (dc.duration > 0).all()

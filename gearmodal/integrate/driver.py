@@ -19,6 +19,7 @@ from ..errors import ModelError
 from .exact import run_exact
 from .loads import force_at
 from .newmark import run_newmark
+from .peaks import PEAK_BIN, PeakTracker
 from .scipy_ref import run_scipy
 from .system import PiecewiseLinearSystem
 
@@ -30,15 +31,23 @@ class Method:
     names it takes. ``loads``: ``(knot_t, knot_u, harmonic_u, harmonic_nu, basis)``, loads on
     their own time structure added to the grid ``F`` (:func:`~gearmodal.integrate.loads.force_at`);
     a method that takes them (``takes_loads``) follows them between output times, the others
-    get them folded into ``F`` at the output times (Newmark: its steps)."""
+    get them folded into ``F`` at the output times (Newmark: its steps). ``peaks``: a
+    :class:`~gearmodal.integrate.peaks.PeakTracker` for the exact peaks (``t0``: the run's
+    time at the call's start), which a method without them marks sampled."""
 
     name = ""
     options: tuple[str, ...] = ()
     takes_loads = False
+    takes_peaks = False
     _run = None
 
     def run(self, system: PiecewiseLinearSystem, dt: float, n_steps: int, F: np.ndarray,
-            x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0, loads=None, **options):
+            x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0, loads=None, peaks=None,
+            t0: float = 0.0, **options):
+        if self.takes_peaks:
+            options = {**options, "peaks": peaks, "t0": t0}
+        elif peaks is not None:
+            peaks.exact = False
         if loads is None:
             return type(self)._run(system, dt, n_steps, F, x0, s0, azimuth0=azimuth0,
                                    **options)
@@ -63,6 +72,7 @@ class Exact(Method):
     name = "exact"
     options = ("max_events_per_step", "propagator")
     takes_loads = True
+    takes_peaks = True
     _run = staticmethod(run_exact)
 
 
@@ -103,9 +113,12 @@ class Driver:
     ----------
     name : the method's name; options : its options (checked).
     dt : output step, s. x0, s0 : the state and contact state at time 0.
+    peak_bin : width of the exact peaks' bins, s (:class:`~.peaks.PeakTracker`); ``None``:
+        none tracked.
     """
 
-    def __init__(self, name: str, dt: float, x0: np.ndarray, s0: np.ndarray, **options):
+    def __init__(self, name: str, dt: float, x0: np.ndarray, s0: np.ndarray,
+                 peak_bin: float | None = PEAK_BIN, **options):
         self.method = get_method(name, options)
         self.options = options
         self.dt = float(dt)
@@ -117,6 +130,8 @@ class Driver:
         self._X, self._S, self._events = [self.x[None]], [self.s[None]], []
         self._store = None  # (X, S) of reserve(): the output rows written in place
         self.stats: dict = {}
+        self.peak_bin = peak_bin
+        self.peaks: PeakTracker | None = None  # made with the first system
 
     def reserve(self, n_steps: int) -> None:
         """Hold the run's ``n_steps`` output steps in one array written as the run goes, so
@@ -133,9 +148,12 @@ class Driver:
         """Advance ``n_steps`` output steps with ``system`` and the force grid ``F``
         (``n_steps + 1`` rows), the input azimuth ``azimuth0`` (rad) at the first; ``loads``
         (times from this call's start) as :class:`Method`."""
+        if self.peaks is None and self.peak_bin is not None:
+            self.peaks = PeakTracker(system, self.peak_bin)
         X, S, ev, st = self.method.run(system, self.dt, n_steps, F, self.x, self.s,
-                                       azimuth0=azimuth0, loads=loads, **self.options)
-        ev = np.array(ev, dtype=float).reshape(-1, 6)
+                                       azimuth0=azimuth0, loads=loads, peaks=self.peaks,
+                                       t0=self.k * self.dt, **self.options)
+        ev = event_rows(ev)
         ev[:, 0] += self.k * self.dt
         self._events.append(ev)
         if self._store is not None:
@@ -166,7 +184,11 @@ class Driver:
         self.x = np.array(x, dtype=float)
         self.s = reconcile(system, self.x, self.s, self.k * self.dt, events, azimuth)
         if events:
-            self._events.append(np.array(events, dtype=float).reshape(-1, 6))
+            ev = event_rows(events)
+            if self.peaks is not None:  # the episodes it ends and begins
+                for row in ev:
+                    row[6:8] = self.peaks.switched(int(row[1]), row[3] > 0.5, row[5], row[0])
+            self._events.append(ev)
         self.stats["rebase_switches"] = self.stats.get("rebase_switches", 0) + len(events)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -175,5 +197,17 @@ class Driver:
             X, S = self._store[0][:self.k + 1], self._store[1][:self.k + 1]
         else:
             X, S = np.concatenate(self._X), np.concatenate(self._S)
-        ev = np.concatenate(self._events) if self._events else np.empty((0, 6))
+        ev = np.concatenate(self._events) if self._events else np.empty((0, 8))
         return X, S, ev
+
+
+def event_rows(ev) -> np.ndarray:
+    """Event rows as an (n, 8) array: the six of every method, then the peak of the episode a
+    row ends and its time (NaN where a method gives none)."""
+    a = np.asarray(ev, dtype=float)
+    if a.size == 0:
+        return np.empty((0, 8))
+    a = a.reshape(len(a), -1) if a.ndim == 2 else a.reshape(-1, 6)
+    if a.shape[1] == 8:
+        return a
+    return np.hstack([a.reshape(-1, 6), np.full((len(a), 2), np.nan)])

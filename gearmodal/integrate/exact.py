@@ -127,7 +127,8 @@ def _check_finite(X: np.ndarray, dt: float) -> None:
 
 def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
               x0: np.ndarray, s0: np.ndarray, max_events_per_step: int = 200,
-              propagator: str = "taylor", azimuth0: float = 0.0, loads=None):
+              propagator: str = "taylor", azimuth0: float = 0.0, loads=None, peaks=None,
+              t0: float = 0.0):
     """Integrate ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
 
     ``F_grid`` (n_steps + 1, n) is the generalised force at the output times (linear in
@@ -152,6 +153,10 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     which the Taylor propagator follows exactly (pieces end at their knots, harmonics are in
     every piece's series); ``"expm"`` holds them linear over each output step (sampled at the
     output times: its solution then depends on ``dt``).
+
+    ``peaks``: a :class:`~gearmodal.integrate.peaks.PeakTracker` the Taylor propagator
+    accumulates the exact peaks in (``t0``: the run's time at this call's start, s); ``"expm"``
+    marks it sampled (``peaks.exact = False``).
     """
     system.asm.require_piecewise_linear("method='exact'")
     if propagator not in PROPAGATORS:
@@ -173,12 +178,14 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     if integ is None:
         kind = TaylorIntegrator if propagator == "taylor" else ExactIntegrator
         integ = cache[key] = kind(system, dt, max_events_per_step)
+    if peaks is not None and propagator != "taylor":
+        peaks.exact = False
     if loads is not None and propagator != "taylor":
         F_grid = F_grid + force_at(loads, np.arange(n_steps + 1) * dt)
         loads = None
     F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))  # input basis, if any
     if propagator == "taylor":
-        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0, loads)
+        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0, loads, peaks, t0)
         _check_finite(X, dt)
         return X, S, events, {"exponentials": 0, **integ.counts}
     prop = integ.prop

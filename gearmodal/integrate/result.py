@@ -17,7 +17,7 @@ from ..result_io import read_csv, read_header, write_header
 from ..sharing import MESH_ROLES, k_gamma_table
 
 EVENT_COLUMNS = ["time", "element", "contact", "state_before", "state_after", "gap_rate",
-                 "force_after"]
+                 "force_after", "peak_force_N", "peak_time"]
 
 
 #: columns of :attr:`SimulationResult.elements`
@@ -66,7 +66,10 @@ class SimulationResult:
         ``contact`` (``front``/``back`` flank, bearing side ``x+``..., polygon facet ramp
         ``facet<i>_<m>``, round clearance ``radial``), ``state_before``,
         ``state_after`` (``open``/``closed``), ``gap_rate`` (m/s, penetration rate at the
-        switch), ``force_after`` (N, the contact force just after the switch).
+        switch), ``force_after`` (N, the contact force just after the switch), and on a row
+        that opens a contact ``peak_force_N`` and ``peak_time`` (s): the exact peak force of
+        the contact episode it ends and when (the exact method's Taylor propagator; NaN on
+        other rows and from other methods).
     contact_state : DataFrame of booleans (closed) per contact at the output times.
     settings : the settings that made the run (method, dt, options).
     initial_state : ``{contact name: closed}`` at ``t[0]``.
@@ -80,6 +83,11 @@ class SimulationResult:
     constraint_forces : coupled systems (:class:`gearmodal.Coupled`) only: the Lagrange
         multipliers, one column per constraint row (N or N m), i.e. the forces the constraints
         transmit (for a joint: the force on body ``b`` in joint axes).
+    peak_bins : the exact peaks (exact method, Taylor propagator): the largest force of each
+        force column, spring channel and radial bearing force (``<element>.radial``) in each
+        bin of ``settings["peak_bin"]`` s, located on the pieces' series, never a sampled
+        value (long format: ``bin_start_s``, ``channel``, ``peak_force_N``, ``time_s``);
+        ``None`` for other methods. Read it with :meth:`peaks`.
     constraint_residual : coupled systems only: the exact residual ``g`` of every constraint
         row along the trajectory (m or rad; rounding for linear constraints, second order for
         linearised joints).
@@ -109,6 +117,7 @@ class SimulationResult:
     constraint_forces: pd.DataFrame | None = None
     constraint_residual: pd.DataFrame | None = None
     elements: pd.DataFrame | None = None
+    peak_bins: pd.DataFrame | None = None
     #: ``tables(name) -> DataFrame`` builds the tables not given (see the class docstring)
     tables: object = field(default=None, repr=False, compare=False)
 
@@ -134,6 +143,59 @@ class SimulationResult:
         return (f"SimulationResult({len(self.t)} times to {self.t[-1]:.6g} s, "
                 f"{self.stats.get('n_events', '?')} events, "
                 f"method={self.settings.get('method', '?')!r})")
+
+    # -- peaks -----------------------------------------------------------------------------
+    def peaks(self, t_from: float = 0.0) -> pd.DataFrame:
+        """The largest force of every force column from ``t_from`` (s) to the end, and of
+        every bearing's radial force ``sqrt(F_x^2 + F_y^2)`` (``<element>.radial``), indexed
+        by ``channel``: ``peak_force_N`` (N or N m: the largest contact force of a flank or a
+        dead band's sides, the largest magnitude of a spring), ``time_s`` and ``exact``.
+
+        ``exact`` is True where the peak is the true maximum of the exact solution
+        (:attr:`peak_bins`: every piece's series, never below a sampled value), which needs
+        ``t_from`` on the bins' grid (a whole number of ``settings["peak_bin"]``); elsewhere
+        the peak is the largest value at the output rows (it depends on the output step).
+
+        Examples
+        --------
+        >>> import math, gearmodal as gm
+        >>> p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
+        >>> w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
+        >>> pair = gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4)
+        >>> sim = gm.simulate(pair, 0.01, dt=1e-3, v0={"pinion.theta": 1.0})
+        >>> pk = sim.peaks()
+        >>> bool(pk.loc["mesh.front", "exact"])
+        True
+        >>> bool(pk.loc["mesh.front", "peak_force_N"] >= sim.forces["mesh.front"].max())
+        True
+        """
+        f = self.forces
+        sel = f[f.index >= t_from - 1e-12]
+        if sel.empty:
+            raise ModelError("t_from", f"= {t_from!r}: after the run's end "
+                             f"({float(self.t[-1]):.6g} s)")
+        cols = {c: sel[c].abs() if not c.endswith((".front", ".back")) else sel[c]
+                for c in sel.columns}
+        for c in list(sel.columns):
+            el, _, d = c.rpartition(".")
+            if d == "x" and f"{el}.y" in sel.columns:
+                cols[f"{el}.radial"] = np.hypot(sel[c], sel[f"{el}.y"])
+        rows = {c: (float(x.max()), float(x.idxmax()), False) for c, x in cols.items()}
+        bins = self.peak_bins
+        pbin = self.settings.get("peak_bin")
+        if bins is not None and len(bins) and pbin:
+            k = t_from / pbin
+            if abs(k - round(k)) <= 1e-9 * max(1.0, abs(k)):
+                b = bins[bins.bin_start_s >= round(k) * pbin - 1e-9 * pbin]
+                if len(b):
+                    top = b.loc[b.groupby("channel", sort=False)["peak_force_N"].idxmax()]
+                    for ch, v, tt in zip(top.channel, top.peak_force_N, top.time_s,
+                                         strict=True):
+                        rows[ch] = (float(v), float(tt), True)
+        out = pd.DataFrame.from_dict(rows, orient="index",
+                                     columns=["peak_force_N", "time_s", "exact"])
+        out.index.name = "channel"
+        return out
 
     # -- structure -----------------------------------------------------------------------
     def meshes(self, role: str | None = None) -> list[str]:
@@ -410,6 +472,8 @@ class SimulationResult:
         self.forces.to_csv(d / "forces.csv", index_label="time")
         self.events.to_csv(d / "events.csv", index=False)
         self.contact_state.to_csv(d / "contact_state.csv", index_label="time")
+        if self.peak_bins is not None:
+            self.peak_bins.to_csv(d / "peak_bins.csv", index=False)
         if self.elements is not None:
             self.elements.to_csv(d / "elements.csv", index_label="element")
         if self.constraint_forces is not None:
@@ -438,7 +502,14 @@ class SimulationResult:
         ev = read_csv(d / "events.csv", dtype={c: str for c in
                                                ("element", "contact", "state_before",
                                                 "state_after")})
-        ev = ev.astype({"time": float, "gap_rate": float, "force_after": float})
+        for c in ("peak_force_N", "peak_time"):  # saved before the exact peaks
+            if c not in ev:
+                ev[c] = np.nan
+        ev = ev.astype({"time": float, "gap_rate": float, "force_after": float,
+                        "peak_force_N": float, "peak_time": float})
+        bins = None
+        if (d / "peak_bins.csv").exists():
+            bins = read_csv(d / "peak_bins.csv", dtype={"channel": str})
         elements = None
         if (d / "elements.csv").exists():
             elements = read_csv(d / "elements.csv", index_col="element", dtype=str,
@@ -452,7 +523,7 @@ class SimulationResult:
         return cls(t=q.index.to_numpy(dtype=float), q=q, v=v, forces=forces, events=ev,
                    contact_state=state, settings=meta,
                    initial_state={k: bool(x) for k, x in head["initial_state"].items()},
-                   stats=stats, elements=elements, **extra)
+                   stats=stats, elements=elements, peak_bins=bins, **extra)
 
 
 for _name, _doc in (

@@ -595,6 +595,396 @@ def first_root(coef, work, stk):
     return np.inf
 
 
+# -- exact peaks (DESIGN 3.2: load statistics from the exact solution) -------------------------
+@numba.njit(cache=True)
+def _shift(c, m, lo, w, out):
+    """``out[k]`` (k < m): the coefficients in ``sigma`` of ``c(lo + w sigma)`` (a Taylor shift
+    by ``lo`` by repeated synthetic division, then the scaling by ``w``)."""
+    for k in range(m):
+        out[k] = c[k]
+    if lo != 0.0:
+        for i in range(m - 1):
+            for j in range(m - 2, i - 1, -1):
+                out[j] += lo * out[j + 1]
+    sc = 1.0
+    for k in range(m):
+        out[k] *= sc
+        sc *= w
+
+
+#: terms of the cheap first bound of :func:`poly_max` (the rest bounded by its magnitudes)
+GATE_TERMS = 12
+
+
+@numba.njit(cache=True, inline="always")
+def _upper(c, n, a, b, level, e):
+    """A bound of the interior values of ``p(tau) = sum_(k < n) c_k tau^k`` on ``[a, b]``
+    (0 <= a <= b <= 1), or ``-inf`` when ``p`` is monotone there (``p'(0)`` dominates the rest
+    of ``p'``: its maximum is at an end): the largest Bernstein coefficient of ``p`` on ``[a,
+    b]`` (convex hull property), first of its first ``GATE_TERMS`` terms plus a bound of the
+    rest (``|tau| <= b``: a tenth of the work), returned if at most ``level``, else of all.
+    ``e``: scratch (n)."""
+    if n < 3 or b <= a:
+        return -np.inf
+    rest = 0.0
+    sc = 1.0
+    for k in range(2, n):
+        sc *= b
+        rest += k * abs(c[k]) * sc
+    if abs(c[1]) > rest:
+        return -np.inf
+    if n > GATE_TERMS:
+        tail = 0.0
+        sc = 1.0
+        for k in range(n):
+            if k >= GATE_TERMS:
+                tail += abs(c[k]) * sc
+            sc *= b
+        _shift(c, GATE_TERMS, a, b - a, e)
+        _bernstein(e[:GATE_TERMS], e[:GATE_TERMS])
+        top = e[0]
+        for k in range(1, GATE_TERMS):
+            top = max(top, e[k])
+        if top + tail <= level:
+            return top + tail
+    _shift(c, n, a, b - a, e)
+    _bernstein(e[:n], e[:n])
+    top = e[0]
+    for k in range(1, n):
+        top = max(top, e[k])
+    return top
+
+
+@numba.njit(cache=True)
+def poly_max(c, a, b, thr, d, e, wflat, stk, counts):
+    """``(value, tau)``: the largest value of ``p(tau) = sum_k c_k tau^k`` on ``[a, b]`` and
+    where, if it exceeds ``thr`` (else a value <= ``thr``: the caller holds a larger one).
+    Candidates are the ends and every interior maximum, a crossing of ``-p'`` from <= 0 to > 0
+    found by :func:`first_root` (Bernstein subdivision: none missed) on ``p'`` shifted to what
+    is left of the interval; the searches alternate with the minima (crossings of ``p'``) so
+    that each starts where its function is not positive, and are skipped where
+    :func:`_upper` shows no value above ``thr`` and the ends. A maximum is located to rounding
+    (``p`` is flat there: the value is exact to rounding). ``d``, ``e`` (len(c)) and ``wflat``
+    ((DEPTH + 5) len(c)), ``stk`` (2, DEPTH + 1): scratch; ``counts[6]``: the searches."""
+    n = c.shape[0]
+    best = _hpoly(c, a)
+    where = a
+    vb = _hpoly(c, b)
+    if vb > best:
+        best = vb
+        where = b
+    if _upper(c, n, a, b, max(thr, best), e) <= max(thr, best):
+        return best, where
+    counts[6] += 1
+    m = n - 1
+    for k in range(m):
+        d[k] = (k + 1.0) * c[k + 1]
+    work = wflat[:(DEPTH + 5) * m].reshape((DEPTH + 5, m))
+    lo = a
+    # each search starts where its function is <= 0 (first_root's premise): -p' (a maximum)
+    # where p rises at a, else p' (the minimum before the next maximum)
+    sign = 1.0 if _hpoly(d[:m], a) < 0.0 else -1.0
+    for _ in range(2 * m + 2):  # p' has at most m - 1 roots
+        w = b - lo
+        if w <= 0.0:
+            break
+        _shift(d, m, lo, w, e)
+        for k in range(m):
+            e[k] *= sign
+        r = first_root(e[:m], work, stk)
+        counts[3] += 1
+        if r == np.inf:
+            break
+        tau = min(lo + w * r, b)
+        if sign < 0.0:
+            v = _hpoly(c, tau)
+            if v > best:
+                best = v
+                where = tau
+            if _upper(c, n, tau, b, max(thr, best), e) <= max(thr, best):
+                break  # nothing higher in the rest
+        lo = tau
+        sign = -sign
+    return best, where
+
+
+@numba.njit(cache=True, inline="always")
+def _row_series(Bv, nt, h, ptr, idx, val, j, k_, c_, off_, out, tmp):
+    """``out[k]`` (k < nt): the scaled series of ``k_ (w . q - off_) + c_ w . v`` of sparse
+    row ``j`` (a contact's force while closed, a spring's force) over the piece ``Bv``."""
+    for k in range(nt):
+        a = 0.0
+        for jj in range(ptr[j], ptr[j + 1]):
+            a += val[jj] * Bv[k, idx[jj]]
+        tmp[k] = a
+    tmp[0] -= off_
+    for k in range(nt):
+        out[k] = k_ * tmp[k]
+        if k + 1 < nt:
+            out[k] += c_ * (k + 1.0) * tmp[k + 1] / h
+
+
+#: terms of a row's series formed for its first bound (:func:`_low_bound`): the rest is
+#: bounded by the magnitudes of the coordinates' terms from there on, ``REACH^16 / 16!`` = 0.13
+#: of the fastest mode's amplitude at most (the full series' magnitudes would allow
+#: ``e^REACH`` = 400 times it: a ripple of 0.03 % of a tooth force defeated that bound)
+LOW_TERMS = 16
+
+
+@numba.njit(cache=True, inline="always")
+def _low_bound(Bv, L, h, te, ptr, idx, val, j, k_, c_, off_, tq, td, tmp, e, upper):
+    """A bound over ``[0, te]`` of the piece of the row's force ``k_ (w . q - off_) + c_ w .
+    v`` (sparse row ``j``; ``upper``: of the force, else of its magnitude): the Bernstein
+    coefficients of its series' first ``L`` terms (convex hull) plus the magnitudes of the rest
+    (``tq``, ``td``: each coordinate's sums of ``|b_k|`` and ``k |b_k|`` from ``L`` on)."""
+    rest = 0.0
+    for k in range(L):
+        a = 0.0
+        for jj in range(ptr[j], ptr[j + 1]):
+            a += val[jj] * Bv[k, idx[jj]]
+        tmp[k] = a
+    tmp[0] -= off_
+    for jj in range(ptr[j], ptr[j + 1]):
+        w = abs(val[jj])
+        rest += w * (abs(k_) * tq[idx[jj]] + abs(c_) * td[idx[jj]] / h)
+    sc = 1.0
+    for k in range(L):
+        f = k_ * tmp[k]
+        if k + 1 < L:
+            f += c_ * (k + 1.0) * tmp[k + 1] / h
+        e[k] = f * sc
+        sc *= te
+    _bernstein(e[:L], e[:L])
+    top = e[0] if upper else abs(e[0])
+    for k in range(1, L):
+        top = max(top, e[k] if upper else abs(e[k]))
+    return top + rest
+
+
+@numba.njit(cache=True)
+def _bin_max(P, t_abs, h, te, b0, b1, pbin, PB, col, EP, e, root, d, ee, wflat, stk, counts):
+    """The maximum of ``P`` (over the piece from ``t_abs`` (s), length ``h``, up to ``te``) in
+    each peak bin it touches into ``PB[b, col]`` and, for a contact (``e >= 0``), into its
+    episode's ``EP[e]``; ``root``: ``P`` is a square, the channel its root."""
+    for b in range(b0, b1 + 1):
+        ta = 0.0 if b == b0 else (b * pbin - t_abs) / h
+        tb = te if b == b1 else ((b + 1) * pbin - t_abs) / h
+        ta = min(max(ta, 0.0), te)
+        tb = min(max(tb, ta), te)
+        thr = PB[b, col, 0]
+        if e >= 0:
+            thr = min(thr, EP[e, 0])
+        if root:
+            thr = thr * abs(thr) if thr > -np.inf else thr
+        v, tau = poly_max(P, ta, tb, thr, d, ee, wflat, stk, counts)
+        if root:
+            v = math.sqrt(max(v, 0.0))
+        tv = t_abs + tau * h
+        if v > PB[b, col, 0]:
+            PB[b, col, 0] = v
+            PB[b, col, 1] = tv
+        if e >= 0 and v > EP[e, 0]:
+            EP[e, 0] = v
+            EP[e, 1] = tv
+
+
+@numba.njit(cache=True)
+def resolve_peak(col, e, root, PC, PM, PN, PB, EP, d, ee, wflat, stk, counts):
+    """Search the pending piece of channel ``col`` (:func:`_track_peaks`) for its maximum into
+    its bin and, for a contact ``e >= 0``, its episode; ``root``: a radial channel (its
+    square pending)."""
+    if PM[col, 0] == -np.inf:
+        return
+    PM[col, 0] = -np.inf
+    m = PN[col]
+    t_abs, h, te, b = PM[col, 1], PM[col, 2], PM[col, 3], int(PM[col, 4])
+    thr = PB[b, col, 0]
+    if e >= 0:
+        thr = min(thr, EP[e, 0])
+    if root and thr > -np.inf:
+        thr = thr * abs(thr)
+    counts[5] += 1
+    v, tau = poly_max(PC[col, :m], 0.0, te, thr, d, ee, wflat, stk, counts)
+    if root:
+        v = math.sqrt(max(v, 0.0))
+    tv = t_abs + tau * h
+    if v > PB[b, col, 0]:
+        PB[b, col, 0] = v
+        PB[b, col, 1] = tv
+    if e >= 0 and v > EP[e, 0]:
+        EP[e, 0] = v
+        EP[e, 1] = tv
+
+
+@numba.njit(cache=True)
+def resolve_all(nc, PC, PM, PN, PB, EP, d, ee, wflat, stk, counts):
+    """Every pending piece searched (the end of a run, a re-basing)."""
+    for col in range(PM.shape[0]):
+        resolve_peak(col, col if col < nc else -1, col >= nc, PC, PM, PN, PB, EP, d, ee, wflat,
+                     stk, counts)
+
+
+@numba.njit(cache=True, inline="always")
+def _offer(col, e, root, P, m, t_abs, h, te, b, v, tau, PC, PM, PN, PB, EP, d, ee, wflat, stk,
+           counts):
+    """One piece of channel ``col`` in one bin ``b``: ``P`` (m terms; a radial channel's
+    square) with its larger end value ``v`` at ``tau`` (the channel's value, not squared).
+    The end value is taken at once; an interior maximum matters only above what the bin (and
+    the episode) hold, so the piece is searched only if its bound (:func:`_upper`) exceeds
+    that, and lazily: it waits as the channel's pending piece, dropped as soon as a later end
+    value rises above its bound (a rising force: nearly every piece), searched when a second
+    one needs the place, at the bin's or episode's end and at the run's."""
+    tv = t_abs + tau * h
+    if v > PB[b, col, 0]:
+        PB[b, col, 0] = v
+        PB[b, col, 1] = tv
+    if e >= 0 and v > EP[e, 0]:
+        EP[e, 0] = v
+        EP[e, 1] = tv
+    level = PB[b, col, 0]
+    if e >= 0:
+        level = min(level, EP[e, 0])
+    if root:
+        level = level * abs(level)
+    if PM[col, 0] != -np.inf and PM[col, 0] <= level:
+        PM[col, 0] = -np.inf  # the pending piece cannot hold anything higher any more
+    counts[4] += 1
+    ub = _upper(P, m, 0.0, te, level, ee)
+    if ub <= level:
+        return
+    if PM[col, 0] != -np.inf:
+        resolve_peak(col, e, root, PC, PM, PN, PB, EP, d, ee, wflat, stk, counts)
+        level = PB[b, col, 0]
+        if e >= 0:
+            level = min(level, EP[e, 0])
+        if root:
+            level = level * abs(level)
+        if ub <= level:
+            return
+    for k in range(m):
+        PC[col, k] = P[k]
+    PN[col] = m
+    PM[col, 0] = ub
+    PM[col, 1] = t_abs
+    PM[col, 2] = h
+    PM[col, 3] = te
+    PM[col, 4] = b
+
+
+@numba.njit(cache=True)
+def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx, FT, sptr,
+                 sidx, sval, sk, sc, chp, EP, PB, pbin, PC, PM, PN, tq, td, fx, fy, P, tmp, d,
+                 ee, wflat, stk, counts):
+    """Exact maxima over the piece ``Bv`` (from absolute time ``t_abs``, length ``h``, up to
+    ``te`` of it: the piece's end or its first event) of every closed contact's force (into its
+    episode ``EP`` and the peak bins ``PB[:, e]``) and of every spring channel's magnitude
+    (rows ``chp``: one row's ``|F|`` or a pair's ``sqrt(F_x^2 + F_y^2)``, into ``PB[:, nc +
+    ch]``). A row's series is formed only where its first bound (:func:`_low_bound`) does not
+    keep it below what the bins and the episode hold already, and searched as :func:`_offer`
+    says (``PC``, ``PM``, ``PN``: each channel's pending piece: its terms, ``(bound, t_abs, h,
+    te, bin)`` (bound ``-inf``: none) and its number of terms). ``counts[4]``: rows offered,
+    ``counts[5]``: searched."""
+    n = Bv.shape[1]
+    nc = off.shape[0]
+    nb = PB.shape[0]
+    L = min(LOW_TERMS, nt)
+    for i in range(n):  # the first bound's tails
+        a = 0.0
+        ad = 0.0
+        for k in range(L, nt):
+            x = abs(Bv[k, i])
+            a += x
+            ad += k * x
+        tq[i] = a
+        td[i] = ad
+    b0 = min(int(t_abs // pbin), nb - 1)
+    b1 = min(int((t_abs + te * h) // pbin), nb - 1)
+    for col in range(PM.shape[0]):  # a pending piece of an earlier bin: its bin is done
+        if PM[col, 0] != -np.inf and (int(PM[col, 4]) != b0 or b1 != b0):
+            resolve_peak(col, col if col < nc else -1, col >= nc, PC, PM, PN, PB, EP, d, ee,
+                         wflat, stk, counts)
+    for e in range(nc):
+        if not s[e]:
+            continue
+        thr = EP[e, 0]
+        for b in range(b0, b1 + 1):
+            thr = min(thr, PB[b, e, 0])
+        et = -1
+        for j in range(tc_idx.shape[0]):
+            if tc_idx[j] == e:
+                et = j
+        if et < 0:
+            if thr > -np.inf and _low_bound(Bv, L, h, te, wptr, widx, wval, e, kc[e], cc[e],
+                                            off[e], tq, td, tmp, ee, True) <= thr:
+                continue
+            _row_series(Bv, nt, h, wptr, widx, wval, e, kc[e], cc[e], off[e], fx, tmp)
+        else:  # a turning contact: its force series (T2)
+            for k in range(nt):
+                fx[k] = FT[et, k]
+        if b0 == b1:  # one bin (nearly every piece)
+            v0 = fx[0]
+            v1 = fx[nt - 1]
+            for k in range(nt - 2, -1, -1):
+                v1 = v1 * te + fx[k]
+            v, tau = (v1, te) if v1 > v0 else (v0, 0.0)
+            _offer(e, e, False, fx, nt, t_abs, h, te, b0, v, tau, PC, PM, PN, PB, EP, d, ee,
+                   wflat, stk, counts)
+        else:
+            counts[5] += 1
+            _bin_max(fx[:nt], t_abs, h, te, b0, b1, pbin, PB, e, EP, e, False, d, ee, wflat,
+                     stk, counts)
+    for ch in range(chp.shape[0]):
+        col = nc + ch
+        thr = PB[b0, col, 0]
+        for b in range(b0 + 1, b1 + 1):
+            thr = min(thr, PB[b, col, 0])
+        two = chp[ch, 1] >= 0
+        if thr > 0.0:
+            r = chp[ch, 0]
+            bx = _low_bound(Bv, L, h, te, sptr, sidx, sval, r, sk[r], sc[r], 0.0, tq, td, tmp,
+                            ee, False)
+            by = 0.0
+            if two:
+                r = chp[ch, 1]
+                by = _low_bound(Bv, L, h, te, sptr, sidx, sval, r, sk[r], sc[r], 0.0, tq, td,
+                                tmp, ee, False)
+            if bx * bx + by * by <= thr * thr:
+                continue
+        _row_series(Bv, nt, h, sptr, sidx, sval, chp[ch, 0], sk[chp[ch, 0]], sc[chp[ch, 0]],
+                    0.0, fx, tmp)
+        if two:
+            _row_series(Bv, nt, h, sptr, sidx, sval, chp[ch, 1], sk[chp[ch, 1]],
+                        sc[chp[ch, 1]], 0.0, fy, tmp)
+        m2 = 2 * nt - 1
+        size = 0.0
+        for j in range(m2):
+            a = 0.0
+            for i in range(max(0, j - nt + 1), min(j, nt - 1) + 1):
+                a += fx[i] * fx[j - i]
+                if two:
+                    a += fy[i] * fy[j - i]
+            P[j] = a
+            size += abs(a)
+        # the square's last terms, together below rounding of its size, left out: a degree
+        # near the series' own instead of twice it
+        tail = 0.0
+        while m2 > 2 and tail + abs(P[m2 - 1]) <= 1e-17 * size:
+            tail += abs(P[m2 - 1])
+            m2 -= 1
+        if b0 == b1:
+            v0 = P[0]
+            v1 = P[m2 - 1]
+            for k in range(m2 - 2, -1, -1):
+                v1 = v1 * te + P[k]
+            v, tau = (v1, te) if v1 > v0 else (v0, 0.0)
+            _offer(col, -1, True, P, m2, t_abs, h, te, b0, math.sqrt(max(v, 0.0)), tau, PC, PM,
+                   PN, PB, EP, d, ee, wflat, stk, counts)
+        else:
+            counts[5] += 1
+            _bin_max(P[:m2], t_abs, h, te, b0, b1, pbin, PB, col, EP, -1, True, d, ee, wflat,
+                     stk, counts)
+
+
 #: force samples within this fraction of their size from the line through a stretch's first
 #: two are on it (the rounding of loads computed on a line, not a kink)
 LINE_TOL = 1e-12
@@ -655,7 +1045,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                counts, sched_t, sched_e, sched_k, sched_pos,
                om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT,
                reach, per_state, Ksym, Wl, km, c0, kappa, rho_keys, rho_vals, TL, FL, MinvUL,
-               GTL, HX, HNU):
+               GTL, HX, HNU, track, EP, PB, pbin, PC, PM, PN, t_call, sptr, sidx, sval, sk,
+               sc, chp):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -693,6 +1084,14 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     every knot, as at a time event; ``HX`` (nh, n) complex and ``HNU`` (nh,) rad/s the harmonic
     loads ``M^-1 F = Re sum_j HX_j exp(i HNU_j t)``, summed into every piece's series
     (:func:`_harmonic_rows`).
+
+    Exact peaks (``track``; :class:`~gearmodal.integrate.peaks.PeakTracker`): every piece's
+    contact forces and spring channels (sparse rows ``sptr``, ``sidx``, ``sval`` with
+    stiffness ``sk`` and damping ``sc``, channels ``chp``) are searched for their maxima
+    (:func:`_track_peaks`) into the bins ``PB`` (n_bins, contacts + channels, 2: value, time)
+    of ``pbin`` s and each contact's open episode ``EP`` (contacts, 2); times are absolute
+    (``t_call``: this call's start). ``EV`` rows have 8 columns: the six above, then on a row
+    that opens a contact the peak force of the episode it ends and its time (else NaN).
     """
     N = x.shape[0]
     n = N // 2
@@ -781,6 +1180,16 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     gR = np.empty(n)  # the force's rate over the piece (grid and knots)
     harmonic = HX.shape[0] > 0
     HF = np.zeros((n_terms, n))
+    # exact peaks: scratch of _track_peaks
+    cs1 = np.empty(n)
+    csd = np.empty(n)
+    pfx = np.zeros(n_terms)
+    pfy = np.zeros(n_terms)
+    ptmp = np.zeros(n_terms)
+    pP = np.zeros(2 * n_terms)
+    pd_ = np.zeros(2 * n_terms)
+    pe_ = np.zeros(2 * n_terms)
+    pwork = np.empty((DEPTH + 5) * 2 * n_terms)
     _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
     toggled = 0
     dense = False
@@ -1055,6 +1464,11 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     roots[e] = r * limit
                     best = min(best, roots[e])
             if best == np.inf:
+                if track:
+                    _track_peaks(Bv, nt, h, t_call + t, 1.0, s, kc, cc, off, wptr, widx, wval,
+                                 tc_idx, FT, sptr, sidx, sval, sk, sc, chp, EP, PB, pbin, PC,
+                                 PM, PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk,
+                                 counts)
                 t_old = t
                 t = t_end if h == remaining else t + h
                 if ip < n_sched and sched_t[ip] - t < simultaneous:
@@ -1087,6 +1501,10 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     pending = False
                 continue
             t_ev = t + best * h
+            if track:
+                _track_peaks(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx, wval,
+                             tc_idx, FT, sptr, sidx, sval, sk, sc, chp, EP, PB, pbin, PC, PM,
+                             PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk, counts)
             while jn <= k2 and jn * dt < t_ev - 1e-13 * dt:  # outputs before the event
                 _evaluate(Bv, (jn * dt - t) / h, h, qo, vo)
                 _write(X, S, jn, qo, vo, s)
@@ -1101,7 +1519,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
             if n_ev + nc > cap:
                 # the event buffer is full: a larger one, here (ending the stretch at an output
                 # time for the caller to grow it would make the pieces depend on dt)
-                grown = np.empty((max(2 * cap, n_ev + nc + 64), 6))
+                grown = np.empty((max(2 * cap, n_ev + nc + 64), EV.shape[1]))
                 grown[:n_ev] = EV[:n_ev]
                 EV = grown
                 cap = EV.shape[0]
@@ -1127,6 +1545,19 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     EV[n_ev, 3] = 1.0 if s[e] else 0.0
                     EV[n_ev, 4] = rr
                     EV[n_ev, 5] = force
+                    EV[n_ev, 6] = np.nan
+                    EV[n_ev, 7] = np.nan
+                    if track:
+                        if before:  # an episode ends: its peak on the row that ends it
+                            resolve_peak(e, e, False, PC, PM, PN, PB, EP, pd_, pe_, pwork, stk,
+                                         counts)
+                            EV[n_ev, 6] = EP[e, 0]
+                            EV[n_ev, 7] = EP[e, 1]
+                            EP[e, 0] = -np.inf
+                            EP[e, 1] = np.nan
+                        else:  # one begins, at the force it closes with
+                            EP[e, 0] = force
+                            EP[e, 1] = t_call + t
                     n_ev += 1
                     count += 1
                     last = e
@@ -1415,11 +1846,13 @@ class TaylorIntegrator:
                         pr.TOFF, pr.TU, np.ascontiguousarray(GT))
 
     def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray,
-            azimuth0: float = 0.0, loads=None):
+            azimuth0: float = 0.0, loads=None, peaks=None, t0: float = 0.0):
         """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`); the input
         azimuth at the start is ``azimuth0`` (rad: alternating mesh stiffness, turning
         geometry); ``loads``: ``(knot_t, knot_u, harmonic_u, harmonic_nu, basis)`` added to
-        ``F`` (:meth:`_loads`)."""
+        ``F`` (:meth:`_loads`); ``peaks``: a :class:`~gearmodal.integrate.peaks.PeakTracker`
+        the exact peaks accumulate in (times from ``t0``, the run's time at this call's
+        start, s). Events are rows of 8 (:func:`taylor_run`)."""
         sysm = self.sys
         TL, FL, MinvUL, GTL, HX, HNU = self._loads(loads, azimuth0)
         kc = np.array(sysm.stiffness_at(azimuth0), dtype=float)  # changed in place by events
@@ -1430,9 +1863,18 @@ class TaylorIntegrator:
         X[0], S[0] = x0, s0
         x = np.array(x0, dtype=float)
         s = np.array(s0, dtype=bool)
-        EV = np.empty((max(64, 4 * (self.max_events + sysm.n_contacts + 1)), 6))  # grows
+        EV = np.empty((max(64, 4 * (self.max_events + sysm.n_contacts + 1)), 8))  # grows
+        if peaks is None:
+            nc = sysm.n_contacts
+            track = (False, np.zeros((nc, 2)), np.zeros((1, nc, 2)), 1.0,
+                     np.zeros((nc, 1)), np.full((nc, 5), -np.inf), np.zeros(nc, dtype=np.int64))
+            rows = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0),
+                    np.zeros(0), np.zeros(0), np.zeros((0, 2), dtype=np.int64))
+        else:
+            peaks.ensure(t0 + n_steps * self.dt)
+            track, rows = peaks.args(), peaks.rows()
         k, n_ev = 0, 0
-        counts = np.zeros(4, dtype=np.int64)
+        counts = np.zeros(7, dtype=np.int64)
         met = int((self.state_bound.keys >= 0).sum())  # states bounded before this run
         # the tie window (kernels.SIMULTANEOUS): on the system's time scale, the piece length
         # of the bound over every state, at most the call's span (a system with no stiffness
@@ -1443,7 +1885,7 @@ class TaylorIntegrator:
             sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
             self.terms, self.tscale, GRAZE_MARGIN, tie, self.max_events, X, S, EV, n_ev,
             counts, *sched, sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
-            *self.state_bound.args(), TL, FL, MinvUL, GTL, HX, HNU)
+            *self.state_bound.args(), TL, FL, MinvUL, GTL, HX, HNU, *track, float(t0), *rows)
         if status != 0:
             raise ModelError(
                 "max_events_per_step",
@@ -1451,9 +1893,11 @@ class TaylorIntegrator:
                 f"ending near t = {(k + 1) * self.dt:.9g} s, last at contact "
                 f"{sysm.names[int(contact)]!r} (tooth chatter or a Zeno sequence); reduce dt, "
                 "add damping, or raise max_events_per_step")
-        events = EV[:n_ev].copy()  # rows (time, contact, before, after, rate, force)
+        events = EV[:n_ev].copy()  # (time, contact, before, after, rate, force, peak, its time)
         self.counts = {"pieces": int(counts[0]), "halved": int(counts[1]),
                        "root_searches": int(counts[2]), "taylor_rows": int(counts[3]),
+                       "peak_series": int(counts[4]), "peak_maxima": int(counts[5]),
+                       "peak_searches": int(counts[6]),
                        "state_bounds": int((self.state_bound.keys >= 0).sum()) - met}
         return X, S, events
 
