@@ -325,7 +325,8 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--seed", type=int, help="turbulence seed (default 1)")
     st.add_argument("--seeds", type=int, help="number of turbulence seeds from --seed on, "
                     "the same for every case (double-contact, mounting-azimuth: default 1, "
-                    "several give effects with 95 %% intervals; fatigue: default 2 per bin)")
+                    "several give effects with 95 %% intervals; fatigue: default 6 per bin, as IEC "
+                    "61400-1 asks for DLC 1.2)")
     st.add_argument("--step", type=float, help="azimuth step, deg (gravity-torque, "
                     "mounting-azimuth, load-sharing)")
     st.add_argument("--no-gravity", action="store_true", dest="no_gravity",

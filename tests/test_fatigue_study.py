@@ -104,3 +104,67 @@ def test_study_fatigue_shortened(tmp_path):
     assert life.loc["clearance / reference", "del_rotor_torque_Nm"] == pytest.approx(1, abs=0.02)
     assert (out / "report.html").exists() and (out / "fatigue.png").stat().st_size > 10_000
     assert math.isfinite(life.loc["reference", "l10_planet_bearing_h"])
+
+
+def test_lifetime_ratios_over_the_seeds_against_a_hand_calculation():
+    """Two gearboxes on three seeds, made-up runs in two bins: the interval's ratio is the
+    geometric mean of the per-seed lifetime ratios (each seed's (D3) alone), its bounds the
+    Student-t interval (C1) of their logarithms; the pooled ratio is lifetime()'s."""
+    from scipy import stats
+
+    rows = []
+    rng = np.random.default_rng(3)
+    for variant, f in (("reference", 1.0), ("clearance", 1.4)):
+        for v in (6.0, 12.0):
+            for sd in (1, 2, 3):
+                rows.append({"variant": variant, "wind_speed_mps": v, "seed": sd,
+                             "duration_s": 100.0,
+                             "del_tooth_N": f * v * 100 * (1 + 0.1 * rng.normal()),
+                             "del_planet_bearing_N": f * v * 10 * (1 + 0.1 * rng.normal()),
+                             "del_rotor_torque_Nm": v, "planet_bearing_revolutions": 50.0,
+                             "planet_bearing_peq_N": 1e5 * f})
+    runs = pd.DataFrame(rows)
+    spec = pd.DataFrame({"quantity": ["x"], "level_low": [0.0], "level_high": [1.0],
+                         "time_s": [10.0], "revolutions": [3.0]})
+    spectra = {i: spec for i in runs.index}
+    r = fatigue.lifetime_ratios(runs, spectra, "II")
+    per = []
+    for sd in (1, 2, 3):
+        g = runs[runs.seed == sd]
+        life, _ = fatigue.lifetime(g, {i: spec for i in g.index}, "II")
+        per.append(np.log(life.loc["clearance", "del_tooth_N"]
+                          / life.loc["reference", "del_tooth_N"]))
+    d = np.array(per)
+    half = stats.t.ppf(0.975, 2) * d.std(ddof=1) / math.sqrt(3)
+    row = r.loc["del_tooth_N"]
+    assert row.ratio == pytest.approx(math.exp(d.mean()), rel=1e-12)
+    assert (row.low, row.high) == pytest.approx((math.exp(d.mean() - half),
+                                                 math.exp(d.mean() + half)), rel=1e-12)
+    pooled, _ = fatigue.lifetime(runs, spectra, "II")
+    assert row.pooled == pytest.approx(pooled.loc["clearance", "del_tooth_N"]
+                                       / pooled.loc["reference", "del_tooth_N"], rel=1e-12)
+    assert r.loc["planet_bearing_peq_N", "ratio"] == pytest.approx(1.4, rel=1e-12)
+    assert row.n == 3 and bool(row.differs)
+
+
+def test_study_fatigue_on_a_dask_local_cluster(tmp_path):
+    """The set on the sweep's executors: a Dask LocalCluster (two worker processes) runs a
+    shortened set with two paired seeds, the same rows as the local process pool's to 1e-12
+    (the same runs: the result does not depend on where a case runs), and writes the
+    lifetime ratios with their intervals over the seeds."""
+    distributed = pytest.importorskip("distributed", reason="the dask extra (CI installs it)")
+    kw = dict(quick=True, duration=16.0, seeds=2, progress=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        fatigue.run(tmp_path / "dask", executor=client.get_executor(), **kw)
+    fatigue.run(tmp_path / "local", max_workers=1, **kw)
+    a = pd.read_csv(tmp_path / "dask" / "summary.csv")
+    b = pd.read_csv(tmp_path / "local" / "summary.csv")
+    assert len(a) == 12 and sorted(a.seed.unique()) == [1, 2]
+    num = [c for c in a.columns if c != "variant" and c != "cpu_s"
+           and pd.api.types.is_numeric_dtype(a[c])]
+    np.testing.assert_allclose(a[num].to_numpy(), b[num].to_numpy(), rtol=1e-12)
+    r = pd.read_csv(tmp_path / "dask" / "lifetime_ratios.csv", index_col="quantity")
+    assert list(r.index) == list(fatigue.RATIOS)
+    assert (r.low <= r.ratio).all() and (r.ratio <= r.high).all() and (r.n == 2).all()
