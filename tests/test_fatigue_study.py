@@ -167,4 +167,7 @@ def test_study_fatigue_on_a_dask_local_cluster(tmp_path):
     np.testing.assert_allclose(a[num].to_numpy(), b[num].to_numpy(), rtol=1e-12)
     r = pd.read_csv(tmp_path / "dask" / "lifetime_ratios.csv", index_col="quantity")
     assert list(r.index) == list(fatigue.RATIOS)
-    assert (r.low <= r.ratio).all() and (r.ratio <= r.high).all() and (r.n == 2).all()
+    assert (r.n == 2).all() and np.isfinite(r[["low", "high"]].to_numpy()).all()
+    # the clearance's rattle raises the tooth DEL on both seeds; the rotor torque's the same
+    assert r.loc["del_tooth_N", "ratio"] > 1.05
+    assert r.loc["del_rotor_torque_Nm", "ratio"] == pytest.approx(1.0, abs=0.02)

@@ -34,11 +34,13 @@ def test_poly_max_finds_the_maximum_of_random_series():
         n = int(rng.integers(5, 41))
         c = series(rng, n)
         b = rng.uniform(0.3, 1.0)
+        a = 0.0 if rng.uniform() < 0.5 else rng.uniform(0.0, 0.9 * b)  # a bin's later part
         thr = -np.inf if rng.uniform() < 0.5 else rng.normal()
-        v, t = poly_max(c, 0.0, b, thr, np.zeros(n), np.zeros(n),
+        v, t = poly_max(c, a, b, thr, np.zeros(n), np.zeros(n),
                         np.empty((DEPTH + 5) * n), np.empty((2, DEPTH + 1)),
                         np.zeros(7, dtype=np.int64))
-        x = np.linspace(0.0, b, 20001)
+        assert a <= t <= b
+        x = np.linspace(a, b, 20001)
         p = np.polynomial.polynomial.polyval(x, c)
         scale = np.abs(c).sum()
         assert p.max() <= max(v, thr) + 1e-12 * scale

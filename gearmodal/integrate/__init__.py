@@ -94,7 +94,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     load_dt : sampling step of callable loads, s (default 1e-4 s, whatever ``dt`` is).
     peak_bin : width of the bins of the exact peaks, s (:meth:`SimulationResult.peaks`: a
         peak over any whole number of bins is exact); ``None``: no exact peaks (the sampled
-        ones; they cost the exact method 20-35 % more CPU on the turbine runs).
+        ones; they cost the exact method 28-30 % more CPU on the turbine runs).
     q0, v0 : initial displacements and velocities by DOF name (others 0). The initial contact
         state follows from ``q0`` (a contact is closed when it penetrates).
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``.

@@ -185,7 +185,7 @@ class Driver:
         self.s = reconcile(system, self.x, self.s, self.k * self.dt, events, azimuth)
         if events:
             ev = event_rows(events)
-            if self.peaks is not None:  # the episodes it ends and begins
+            if self.peaks is not None and self.peaks.exact:  # the episodes it ends, begins
                 for row in ev:
                     row[6:8] = self.peaks.switched(int(row[1]), row[3] > 0.5, row[5], row[0])
             self._events.append(ev)

@@ -26,9 +26,12 @@ from ..model import validate as v
 
 __all__ = ["LOAD_DT", "Harmonic", "LoadPaths", "force_at", "load_paths"]
 
-#: default load step of a callable load, s: a 1.1 Hz sine sampled on it is within 6e-9 of its
-#: amplitude between samples ((2 pi f dt)^2 / 8), an 80 Hz one within 3e-5
+#: default load step of a callable load, s: a 1.1 Hz sine sampled on it is within 6e-8 of its
+#: amplitude between samples ((2 pi f dt)^2 / 8), an 80 Hz one within 3e-4
 LOAD_DT = 1e-4
+#: a knot whose two sides' slopes agree to this fraction of the load is no kink: left out
+#: (a straight stretch of samples, a constant callable, ends no pieces)
+LINE_TOL = 1e-12
 #: most knots of a run's load table (every callable sample and series knot in the run)
 MAX_KNOTS = 5e7
 
@@ -79,13 +82,8 @@ class LoadPaths:
     def values(self, t: np.ndarray) -> np.ndarray:
         """The loads (len(t), m) at times ``t`` (s)."""
         t = np.asarray(t, dtype=float)
-        U = np.broadcast_to(self.constant, (len(t), len(self.constant))).copy()
-        if len(self.knot_t):
-            for j in np.flatnonzero(np.any(self.knot_u != 0.0, axis=0)):
-                U[:, j] += np.interp(t, self.knot_t, self.knot_u[:, j])
-        for u, nu in zip(self.harmonic_u, self.harmonic_nu, strict=True):
-            U += (np.exp(1j * nu * t)[:, None] * u[None, :]).real
-        return U
+        return self.constant[None, :] + _timed(self.knot_t, self.knot_u, self.harmonic_u,
+                                               self.harmonic_nu, t, len(self.constant))
 
     def columns(self, cols: list[int]) -> LoadPaths:
         """The same loads on the columns ``cols`` only (in that order)."""
@@ -106,13 +104,18 @@ def force_at(loads, t: np.ndarray) -> np.ndarray:
     (mF, mL) of the force grid (the form the integration methods take)."""
     kt, ku, hu, hnu, basis = loads
     t = np.atleast_1d(np.asarray(t, dtype=float))
-    U = np.zeros((len(t), np.shape(basis)[1]))
+    return _timed(kt, ku, hu, hnu, t, np.shape(basis)[1]) @ np.asarray(basis).T
+
+
+def _timed(kt, ku, hu, hnu, t: np.ndarray, m: int) -> np.ndarray:
+    """The knots' and harmonics' part (len(t), m) of loads at times ``t``."""
+    U = np.zeros((len(t), m))
     if len(kt):
         for j in np.flatnonzero(np.any(ku != 0.0, axis=0)):
             U[:, j] += np.interp(t, kt, ku[:, j])
     for u, nu in zip(hu, hnu, strict=True):
         U += (np.exp(1j * nu * t)[:, None] * np.asarray(u)[None, :]).real
-    return U @ np.asarray(basis).T
+    return U
 
 
 def _series(name: str, val: pd.Series) -> tuple[np.ndarray, np.ndarray]:
@@ -161,7 +164,7 @@ def load_paths(names: list[str], loads: dict | None, t_end: float,
             if n > MAX_KNOTS:
                 raise ModelError("load_dt", f"= {load_dt!r}: {n:.3g} samples of loads.{name}; "
                                  f"at most {MAX_KNOTS:.0e} (a longer load_dt)")
-            idx = np.minimum(np.arange(n + 1) * load_dt, t_end)
+            idx = np.arange(n + 1) * load_dt  # the last at or after the end
             try:
                 y = np.array([float(val(tt)) for tt in idx])
             except (TypeError, ValueError) as err:
@@ -191,4 +194,13 @@ def load_paths(names: list[str], loads: dict | None, t_end: float,
     ku = np.zeros((len(kt), m))
     for j, (idx, y) in series.items():
         ku[:, j] = np.interp(kt, idx, y)
+    # only the kinks end pieces: a knot whose sides' slopes agree (a straight stretch) is
+    # left out, which leaves the piecewise-linear load as it is
+    if len(kt) > 2:
+        s = np.diff(ku, axis=0) / np.diff(kt)[:, None]
+        scale = np.abs(ku).max(axis=0) + 1e-300
+        kink = np.any(np.abs(s[1:] - s[:-1]) * (kt[2:] - kt[:-2])[:, None]
+                      > LINE_TOL * scale, axis=1)
+        keep = np.concatenate([[True], kink, [True]])
+        kt, ku = kt[keep], ku[keep]
     return LoadPaths(const, kt, ku, hu, hnu)

@@ -185,9 +185,13 @@ def peak_table(tracker: PeakTracker, columns: list, t_end: float) -> pd.DataFram
     if not cols:
         return pd.DataFrame(columns=["bin_start_s", "channel", "peak_force_N", "time_s"])
     V, T = np.array(vals).T, np.array(times).T  # (bins, channels)
-    # a bin no piece reached (an open contact throughout): no force, at the bin's start
+    # a bin no piece reached (an open contact throughout): no force, at the bin's start; a
+    # contact whose largest k p + c p' in a bin is negative (damping just before it opens) was
+    # open in that bin too, where its force is 0 (the force column's value)
     starts = np.arange(nb) * tracker.bin
+    n_contact_cols = len(cols) - len(tracker.channels)
     empty = ~np.isfinite(V)
+    empty[:, :n_contact_cols] |= V[:, :n_contact_cols] < 0.0
     V = np.where(empty, 0.0, V)
     T = np.where(empty, starts[:, None], T)
     return pd.DataFrame({"bin_start_s": np.repeat(starts, len(cols)),

@@ -692,7 +692,6 @@ def poly_max(c, a, b, thr, d, e, wflat, stk, counts):
         for k in range(m):
             e[k] *= sign
         r = first_root(e[:m], work, stk)
-        counts[3] += 1
         if r == np.inf:
             break
         tau = min(lo + w * r, b)
@@ -882,8 +881,9 @@ def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
     ch]``). A row's series is formed only where its first bound (:func:`_low_bound`) does not
     keep it below what the bins and the episode hold already, and searched as :func:`_offer`
     says (``PC``, ``PM``, ``PN``: each channel's pending piece: its terms, ``(bound, t_abs, h,
-    te, bin)`` (bound ``-inf``: none) and its number of terms). ``counts[4]``: rows offered,
-    ``counts[5]``: searched."""
+    te, bin)`` (bound ``-inf``: none) and its number of terms). ``counts[4]``: rows offered
+    (:func:`_offer`), ``counts[5]``: pieces searched (:func:`poly_max`), ``counts[6]``: of
+    those, searched for interior maxima."""
     n = Bv.shape[1]
     nc = off.shape[0]
     nb = PB.shape[0]
@@ -1353,9 +1353,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 if harmonic:
                     _harmonic_rows(HX, HNU, t, h, nt, HF)
                 if turning:
-                    turning_loads = loads
-                    if loads_knots:
-                        turning_loads = True
+                    # (a name, not an expression, in the call: numba's bytecode limit)
+                    turning_loads = loads or loads_knots
                     _coefficients(MKC, g0, gR, q, v, h, Bv, ysc, E, EL, tcols, krows, urows, ZK,
                                   ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, VST,
                                   cturn, turning_loads, HF, harmonic)
@@ -1871,6 +1870,9 @@ class TaylorIntegrator:
             rows = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0),
                     np.zeros(0), np.zeros(0), np.zeros((0, 2), dtype=np.int64))
         else:
+            if 2 * self.n_terms - 1 > peaks.PC.shape[1]:  # (numba does not check bounds)
+                raise ValueError(f"{self.n_terms} terms: the peak tracker holds pieces of at "
+                                 f"most {(peaks.PC.shape[1] + 1) // 2}")
             peaks.ensure(t0 + n_steps * self.dt)
             track, rows = peaks.args(), peaks.rows()
         k, n_ev = 0, 0

@@ -73,7 +73,7 @@ def test_harmonic_load_is_integrated_exactly(dt):
 def test_harmonic_mean_and_phase_against_a_finely_sampled_callable():
     """``mean + amplitude sin(2 pi f t + phase)`` as the scene files give it, against the same
     function as a plain callable sampled every microsecond (interpolation error below
-    (2 pi f dt)^2 / 8 = 6e-8 of the amplitude): the same events to 1e-8 s."""
+    (2 pi f dt)^2 / 8 = 6e-9 of the amplitude): the same events to 1e-8 s."""
     wave = gm.Harmonic(20.0, 30.0, 35.0, 2.0)
     a = gm.simulate(block(), 0.02, dt=1e-4, loads={"body.force_x": wave})
     b = gm.simulate(block(), 0.02, dt=1e-4, load_dt=1e-6,
