@@ -760,6 +760,30 @@ def _low_bound(Bv, L, h, te, ptr, idx, val, j, k_, c_, off_, tq, td, tmp, e, upp
     return top + rest
 
 
+@numba.njit(cache=True, inline="always")
+def _level(PB, EP, b, col, e, root):
+    """What a piece of channel ``col`` must exceed to matter: its bin's peak and, for a contact
+    ``e >= 0``, its episode's (the smaller); squared for a radial channel (``root``)."""
+    thr = PB[b, col, 0]
+    if e >= 0:
+        thr = min(thr, EP[e, 0])
+    if root and thr > -np.inf:
+        thr = thr * abs(thr)
+    return thr
+
+
+@numba.njit(cache=True, inline="always")
+def _record(v, tv, b, col, e, PB, EP):
+    """Value ``v`` at time ``tv`` into bin ``b`` of channel ``col`` and contact ``e``'s episode
+    (``e >= 0``), where it is larger."""
+    if v > PB[b, col, 0]:
+        PB[b, col, 0] = v
+        PB[b, col, 1] = tv
+    if e >= 0 and v > EP[e, 0]:
+        EP[e, 0] = v
+        EP[e, 1] = tv
+
+
 @numba.njit(cache=True)
 def _bin_max(P, t_abs, h, te, b0, b1, pbin, PB, col, EP, e, root, d, ee, wflat, stk, counts):
     """The maximum of ``P`` (over the piece from ``t_abs`` (s), length ``h``, up to ``te``) in
@@ -770,21 +794,9 @@ def _bin_max(P, t_abs, h, te, b0, b1, pbin, PB, col, EP, e, root, d, ee, wflat, 
         tb = te if b == b1 else ((b + 1) * pbin - t_abs) / h
         ta = min(max(ta, 0.0), te)
         tb = min(max(tb, ta), te)
-        thr = PB[b, col, 0]
-        if e >= 0:
-            thr = min(thr, EP[e, 0])
-        if root:
-            thr = thr * abs(thr) if thr > -np.inf else thr
-        v, tau = poly_max(P, ta, tb, thr, d, ee, wflat, stk, counts)
-        if root:
-            v = math.sqrt(max(v, 0.0))
-        tv = t_abs + tau * h
-        if v > PB[b, col, 0]:
-            PB[b, col, 0] = v
-            PB[b, col, 1] = tv
-        if e >= 0 and v > EP[e, 0]:
-            EP[e, 0] = v
-            EP[e, 1] = tv
+        v, tau = poly_max(P, ta, tb, _level(PB, EP, b, col, e, root), d, ee, wflat, stk,
+                          counts)
+        _record(math.sqrt(max(v, 0.0)) if root else v, t_abs + tau * h, b, col, e, PB, EP)
 
 
 @numba.njit(cache=True)
@@ -797,22 +809,10 @@ def resolve_peak(col, e, root, PC, PM, PN, PB, EP, d, ee, wflat, stk, counts):
     PM[col, 0] = -np.inf
     m = PN[col]
     t_abs, h, te, b = PM[col, 1], PM[col, 2], PM[col, 3], int(PM[col, 4])
-    thr = PB[b, col, 0]
-    if e >= 0:
-        thr = min(thr, EP[e, 0])
-    if root and thr > -np.inf:
-        thr = thr * abs(thr)
     counts[5] += 1
-    v, tau = poly_max(PC[col, :m], 0.0, te, thr, d, ee, wflat, stk, counts)
-    if root:
-        v = math.sqrt(max(v, 0.0))
-    tv = t_abs + tau * h
-    if v > PB[b, col, 0]:
-        PB[b, col, 0] = v
-        PB[b, col, 1] = tv
-    if e >= 0 and v > EP[e, 0]:
-        EP[e, 0] = v
-        EP[e, 1] = tv
+    v, tau = poly_max(PC[col, :m], 0.0, te, _level(PB, EP, b, col, e, root), d, ee, wflat,
+                      stk, counts)
+    _record(math.sqrt(max(v, 0.0)) if root else v, t_abs + tau * h, b, col, e, PB, EP)
 
 
 @numba.njit(cache=True)
@@ -833,18 +833,8 @@ def _offer(col, e, root, P, m, t_abs, h, te, b, v, tau, PC, PM, PN, PB, EP, d, e
     that, and lazily: it waits as the channel's pending piece, dropped as soon as a later end
     value rises above its bound (a rising force: nearly every piece), searched when a second
     one needs the place, at the bin's or episode's end and at the run's."""
-    tv = t_abs + tau * h
-    if v > PB[b, col, 0]:
-        PB[b, col, 0] = v
-        PB[b, col, 1] = tv
-    if e >= 0 and v > EP[e, 0]:
-        EP[e, 0] = v
-        EP[e, 1] = tv
-    level = PB[b, col, 0]
-    if e >= 0:
-        level = min(level, EP[e, 0])
-    if root:
-        level = level * abs(level)
+    _record(v, t_abs + tau * h, b, col, e, PB, EP)
+    level = _level(PB, EP, b, col, e, root)
     if PM[col, 0] != -np.inf and PM[col, 0] <= level:
         PM[col, 0] = -np.inf  # the pending piece cannot hold anything higher any more
     counts[4] += 1
@@ -853,11 +843,7 @@ def _offer(col, e, root, P, m, t_abs, h, te, b, v, tau, PC, PM, PN, PB, EP, d, e
         return
     if PM[col, 0] != -np.inf:
         resolve_peak(col, e, root, PC, PM, PN, PB, EP, d, ee, wflat, stk, counts)
-        level = PB[b, col, 0]
-        if e >= 0:
-            level = min(level, EP[e, 0])
-        if root:
-            level = level * abs(level)
+        level = _level(PB, EP, b, col, e, root)
         if ub <= level:
             return
     for k in range(m):
