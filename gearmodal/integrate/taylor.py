@@ -736,22 +736,14 @@ def _low_bound(Bv, L, h, te, ptr, idx, val, j, k_, c_, off_, tq, td, tmp, e, upp
     v`` (sparse row ``j``; ``upper``: of the force, else of its magnitude): the Bernstein
     coefficients of its series' first ``L`` terms (convex hull) plus the magnitudes of the rest
     (``tq``, ``td``: each coordinate's sums of ``|b_k|`` and ``k |b_k|`` from ``L`` on)."""
+    _row_series(Bv, L, h, ptr, idx, val, j, k_, c_, off_, e, tmp)  # the first L terms
     rest = 0.0
-    for k in range(L):
-        a = 0.0
-        for jj in range(ptr[j], ptr[j + 1]):
-            a += val[jj] * Bv[k, idx[jj]]
-        tmp[k] = a
-    tmp[0] -= off_
     for jj in range(ptr[j], ptr[j + 1]):
         w = abs(val[jj])
         rest += w * (abs(k_) * tq[idx[jj]] + abs(c_) * td[idx[jj]] / h)
     sc = 1.0
     for k in range(L):
-        f = k_ * tmp[k]
-        if k + 1 < L:
-            f += c_ * (k + 1.0) * tmp[k + 1] / h
-        e[k] = f * sc
+        e[k] *= sc
         sc *= te
     _bernstein(e[:L], e[:L])
     top = e[0] if upper else abs(e[0])
