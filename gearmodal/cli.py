@@ -138,6 +138,10 @@ def cmd_simulate(args) -> int:
     run = None
     from tqdm import tqdm
 
+    # the tables stream to OUT while the run goes (constant memory), unless CSV is asked for
+    # or the step ladder runs (its rungs have their own store)
+    stream = args.format == "parquet" and scene.method != "auto"
+    into = args.out if stream else None
     if scene.method == "auto":  # the step ladder, one bar step per rung (gearmodal.auto)
         from .auto import choose, chosen_result, fingerprint
 
@@ -151,13 +155,14 @@ def cmd_simulate(args) -> int:
     elif scene.turbine is not None:
         with tqdm(total=int(round(scene.t_end / scene.drivetrain.get("aero_dt", 0.02))),
                   desc="turbine + gearbox", unit="step", disable=args.quiet) as bar:
-            res = scene.simulate(progress=lambda i, n: bar.update(1))
+            res = scene.simulate(progress=lambda i, n: bar.update(1), out=into)
     else:
-        res = scene.simulate()
+        res = scene.simulate(out=into)
+    fmt = args.format
     if scene.turbine is not None:
         run = res
         sim = run.gearbox
-        out = run.save(args.out)
+        out = run.save(args.out, fmt)
         fig = run.plot()
         fig.savefig(out / "drivetrain.png", dpi=130)
         plt.close(fig)
@@ -166,7 +171,7 @@ def cmd_simulate(args) -> int:
         plt.close(fig)
     else:
         sim = res
-        out = sim.save(args.out)
+        out = sim.save(args.out, fmt)
     auto = getattr(res, "auto", None)
     if auto is not None:
         auto.save(out)
@@ -184,22 +189,39 @@ def cmd_simulate(args) -> int:
     plt.close(fig)
     dc = sim.double_contact()
     dc.to_csv(out / "double_contact.csv", index=False)
-    ls = sim.load_sharing()
-    if ls.shape[1]:
-        ls.to_csv(out / "load_sharing.csv", index_label="time")
+    _write_load_sharing(sim, out, fmt)
     if run is not None:
         st = run.stats
         cut = run.cut_in_time
-        power = run.turbine.loads["power_W"]
+        power = run.turbine.view(["power_W"], max_rows=None)["power_W"]
         tail = power[power.index >= power.index[-1] / 2].mean() / 1e3
         print(f"cut-in at {cut:.2f} s" if cut is not None else "no cut-in", end="; ")
         print(f"mean power over the second half {tail:.0f} kW; "
               f"{st['realtime_ratio']:.2f} simulated s per CPU s (aero {st['aero_s']:.2g} s, "
               f"wind {st['wind_s'] + st['wind_setup_s']:.2g} s, gearbox "
-              f"{st['gearbox_s']:.2g} s); wrote {out}/turbine_loads.csv, drivetrain.png")
-    print(f"{len(sim.events)} contact events, {len(dc)} double-contact episodes, "
-          f"{sim.stats['cpu_s']:.3g} s CPU; wrote {out}/events.csv, forces.csv, forces.png")
+              f"{st['gearbox_s']:.2g} s); wrote {out}/turbine_loads.{fmt}, drivetrain.png")
+    print(f"{sim.stats['n_events']} contact events, {len(dc)} double-contact episodes, "
+          f"{sim.stats['cpu_s']:.3g} s CPU; wrote {out}/events.{fmt}, forces.{fmt}, "
+          "forces.png")
     return 0
+
+
+def _write_load_sharing(sim, out: Path, fmt: str) -> None:
+    """``load_sharing.<fmt>`` of a run with planets, written a chunk of rows at a time."""
+    if not sim.meshes("sun_planet"):
+        return
+    if fmt == "csv":
+        sim.load_sharing().to_csv(out / "load_sharing.csv", index_label="time")
+        return
+    from .result_io import TableWriter
+
+    writer = None
+    for chunk, _ in sim.load_sharing_chunks():
+        if writer is None:
+            writer = TableWriter(out, "load_sharing", list(chunk.columns))
+        writer.append(chunk.index.to_numpy(dtype=float), chunk.to_numpy(dtype=float))
+    if writer is not None:
+        writer.close()
 
 
 STUDIES = ("double-contact", "gravity-torque", "mounting-azimuth", "clearance-map",
@@ -313,6 +335,10 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--out", required=True, type=_out_folder, help="output folder")
     sm.add_argument("--t-end", type=float, dest="t_end", help="override the end time, s")
     sm.add_argument("--quiet", action="store_true", help="no progress bar")
+    sm.add_argument("--format", choices=("parquet", "csv"), default="parquet",
+                    help="the result tables' format (default parquet: written while the run "
+                         "goes, in constant memory; csv: the run held in memory, then "
+                         "written)")
     sm.set_defaults(func=cmd_simulate)
     st = sub.add_parser("study", help="run one of the paper's studies (studies/*.py): "
                         + ", ".join(STUDIES))

@@ -219,11 +219,12 @@ class Scene:
                            if v is not None}
         return doc
 
-    def simulate(self, progress=None):
+    def simulate(self, progress=None, out=None):
         """Run the scene: :func:`gearmodal.simulate` on the model with the scene's loads, or,
         with a ``[turbine]`` table, :func:`gearmodal.turbine.simulate_drivetrain` (returns a
         :class:`~gearmodal.turbine.DrivetrainResult`). ``progress(i, n)`` is passed to the
-        turbine run.
+        turbine run. ``out``: a directory the run's tables stream to as it goes (constant
+        memory; not with ``method = "auto"``, whose rungs have their own store).
 
         ``method = "auto"`` runs the step ladder of :func:`gearmodal.auto.choose` with the
         scene's ``tolerance`` and returns the chosen rung's result, the choice attached as
@@ -231,6 +232,9 @@ class Scene:
         if self.method == "auto":
             from .auto import LEVELS, choose, chosen_result
 
+            if out is not None:
+                raise ModelError("out", "method = 'auto' keeps its rungs in its own store; "
+                                 "save the chosen result instead")
             step = None if progress is None else (lambda lv, st, row: progress(lv + 1, LEVELS))
             return chosen_result(choose(self, self.tolerance, progress=step),
                                  "scene.tolerance")
@@ -239,12 +243,12 @@ class Scene:
 
             return simulate_drivetrain(self.turbine, self.wind, self.model, self.t_end,
                                        dt=self.dt, method=self.method, progress=progress,
-                                       **self.drivetrain, **self.options)
+                                       out=out, **self.drivetrain, **self.options)
         from .integrate import simulate
 
         return simulate(self.model, self.t_end, dt=self.dt, loads=self.loads, q0=self.q0,
                         v0=self.v0, method=self.method, speed_rpm=self.speed_rpm,
-                        **self.options)
+                        out=out, **self.options)
 
 
 @dataclass(frozen=True)

@@ -67,7 +67,7 @@ def test_scene_method_auto_returns_the_chosen_rung_and_the_cli_writes_the_table(
     assert sim.settings["method"] == "exact"
     out = tmp_path / "run"
     assert main(["simulate", str(p), "--out", str(out), "--quiet"]) == 0
-    for f in ("auto.csv", "auto.json", "auto.png", "events.csv", "forces.csv"):
+    for f in ("auto.csv", "auto.json", "auto.png", "events.parquet", "forces.parquet"):
         assert (out / f).exists(), f
 
 

@@ -46,10 +46,10 @@ def test_simulate_scene_writes_events_forces_and_figures(tmp_path):
     out = tmp_path / "dc"
     assert main(["simulate", "studies/scenes/planetary_double_contact.toml", "--out", str(out),
                  "--t-end", "0.05"]) == 0
-    for f in ("events.csv", "forces.csv", "forces.png", "double_contact.csv",
-              "load_sharing.csv", "settings.json"):
+    for f in ("events.parquet", "forces.parquet", "forces.png", "double_contact.csv",
+              "load_sharing.parquet", "settings.json"):
         assert (out / f).exists(), f
-    ev = pd.read_csv(out / "events.csv")
+    ev = pd.read_parquet(out / "events.parquet")
     assert list(ev.columns) == ["time", "element", "contact", "state_before", "state_after",
                                 "gap_rate", "force_after", "peak_force_N", "peak_time"]
     ends = ev[ev.state_after == "open"]
@@ -57,6 +57,18 @@ def test_simulate_scene_writes_events_forces_and_figures(tmp_path):
     assert (ev.contact == "back").any()  # the clearance lets the back flanks touch
     dc = pd.read_csv(out / "double_contact.csv")
     assert len(dc) and (dc.duration > 0).all()
+    # the tables streamed while the run went are the run's: the same as CSV written after it
+    csv = tmp_path / "csv"
+    assert main(["simulate", "studies/scenes/planetary_double_contact.toml", "--out", str(csv),
+                 "--t-end", "0.05", "--format", "csv"]) == 0
+    pd.testing.assert_frame_equal(pd.read_csv(csv / "events.csv"), ev, check_exact=True,
+                                  check_dtype=False)
+    f_csv = pd.read_csv(csv / "forces.csv", index_col="time", float_precision="round_trip")
+    f_pq = pd.read_parquet(out / "forces.parquet").set_index("time")
+    pd.testing.assert_frame_equal(f_csv, f_pq, check_exact=True)
+    ls_csv = pd.read_csv(csv / "load_sharing.csv", index_col="time", float_precision="round_trip")
+    pd.testing.assert_frame_equal(ls_csv, pd.read_parquet(out / "load_sharing.parquet")
+                                  .set_index("time"), check_exact=True)
 
 
 def test_bad_scene_is_one_line_error(tmp_path):

@@ -114,10 +114,10 @@ def test_turbine_scene_cli_writes_loads_events_forces_figures(tmp_path):
     rc = main(["simulate", "studies/scenes/600kw_turbine_10ms.toml", "--out",
                str(tmp_path), "--t-end", "0.2", "--quiet"])
     assert rc == 0
-    for name in ("turbine_loads.csv", "events.csv", "forces.csv", "drivetrain.png",
-                 "turbine.png", "forces.png", "stats.json"):
+    for name in ("turbine_loads.parquet", "events.parquet", "forces.parquet", "q.parquet",
+                 "drivetrain.png", "turbine.png", "forces.png", "stats.json"):
         assert (tmp_path / name).exists(), name
-    loads = pd.read_csv(tmp_path / "turbine_loads.csv", index_col="time")
+    loads = pd.read_parquet(tmp_path / "turbine_loads.parquet").set_index("time")
     assert len(loads) == 10 and loads["torque_Nm"].gt(0).all()  # 0.2 s at 20 ms, driving
     scene = load_scene("studies/scenes/600kw_turbine_10ms.toml")
     assert scene.wind.turbulence_intensity == pytest.approx(0.12)

@@ -124,8 +124,12 @@ def test_result_outputs(tmp_path):
                                         "peak_force_N", "peak_time"]
     assert {"mesh.front", "mesh.back"} <= set(sim.forces.columns)
     sim.save(tmp_path)
-    for f in ("events.csv", "forces.csv", "q.csv", "settings.json"):
+    for f in ("events.parquet", "forces.parquet", "q.parquet", "settings.json"):
         assert (tmp_path / f).exists()
+    sim.save(tmp_path / "csv", format="csv")  # CSV when asked for
+    for f in ("events.csv", "forces.csv", "q.csv", "settings.json"):
+        assert (tmp_path / "csv" / f).exists()
+    assert not (tmp_path / "csv" / "forces.parquet").exists()
     assert sim.plot().axes
     # both flanks are never closed together in a free rattle of a pair with backlash
     assert sim.double_contact().empty

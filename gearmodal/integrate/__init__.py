@@ -28,11 +28,10 @@ from .azimuth import AzimuthAssembler
 from .driver import METHODS, Driver, Method, event_rows, get_method
 from .loads import LOAD_DT, Harmonic, load_paths
 from .peaks import PEAK_BIN, peak_table
-from .result import ELEMENT_COLUMNS, EVENT_COLUMNS, SimulationResult
+from .record import ForceMap, Recorder, event_table
+from .result import ELEMENT_COLUMNS, SimulationResult, StoredTables
 from .system import PiecewiseLinearSystem
 
-#: pandas 3 has a string dtype of its own ("str"); pandas 2 keeps labels as objects
-_PANDAS_3 = int(pd.__version__.split(".")[0]) >= 3
 #: most output steps of a run (each a row of the result's tables)
 MAX_STEPS = 5e7
 
@@ -77,7 +76,7 @@ def rotating_geometry(model: Model) -> bool:
 def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
              q0: dict | None = None, v0: dict | None = None, method: str = "exact",
              speed_rpm: float = 0.0, load_dt: float = LOAD_DT,
-             peak_bin: float | None = PEAK_BIN, **options) -> SimulationResult:
+             peak_bin: float | None = PEAK_BIN, out=None, **options) -> SimulationResult:
     """Simulate the nonlinear contact dynamics of ``model`` from 0 to ``t_end`` (s).
 
     Parameters
@@ -97,6 +96,9 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         ones; they cost the exact method 28-30 % more CPU on the turbine runs).
     q0, v0 : initial displacements and velocities by DOF name (others 0). The initial contact
         state follows from ``q0`` (a contact is closed when it penetrates).
+    out : a directory the result's tables are written to as Parquet while the run goes (as
+        :meth:`SimulationResult.save` writes them); the result then reads them from there
+        when first asked for. ``None``: the tables stay in memory.
     method : ``"exact"``, ``"newmark"`` or ``"scipy"``.
     speed_rpm : input speed (either sense) at which gyroscopic/centripetal terms are taken;
         the input azimuth turns at it from 0. Where frames turn against each other (a carrier
@@ -189,19 +191,29 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     timed = None
     if part.time_varying:  # knots and harmonics acting through the force rows ``basis``
         timed = (part.knot_t, part.knot_u, part.harmonic_u, part.harmonic_nu, basis)
-    run = Driver(method, dt, x, s, peak_bin=peak_bin, **options)
-    run.advance(system, n_steps, F, azimuth0=0.0, loads=timed)
+    sink = None
+    if out is not None:
+        if casm is not None:
+            raise ModelError("out", "a coupled system's run is not streamed (its constraint "
+                             "forces need the whole run): simulate it, then result.save(DIR)")
+        sink = Recorder(out, system, dt,
+                        mesh_k=lambda sy, az: mesh_stiffness(system, az))
+    run = Driver(method, dt, x, s, peak_bin=peak_bin, sink=sink, **options)
+    run.advance(system, n_steps, F, azimuth0=0.0, loads=timed, azimuths=omega * t)
     X, S, events = run.arrays()
-    stats = {**run.stats, "cpu_s": time.process_time() - cpu, "n_events": len(events),
+    stats = {**run.stats, "cpu_s": time.process_time() - cpu, "n_events": run.n_events,
              "n_steps": n_steps}
+    settings = {"model": name, "method": method, "t_end": t_end, "dt": dt,
+                "speed_rpm": speed_rpm, "load_dt": load_dt, "peak_bin": peak_bin,
+                "options": options,
+                "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
+                          for k, v in (loads or {}).items()},
+                "q0": q0 or {}, "v0": v0 or {}}
+    if sink is not None:
+        return stored_result(sink, system, s_init, stats, settings, (0.0, float(t[-1])),
+                             peaks=run.peaks)
     result = build_result([tuple(sg) for sg in run.segments], t, X, S, events, s_init, stats,
-                     mesh_stiffness(system, omega * t),
-                     {"model": name, "method": method, "t_end": t_end, "dt": dt,
-                      "speed_rpm": speed_rpm, "load_dt": load_dt, "peak_bin": peak_bin,
-                      "options": options,
-                      "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
-                                for k, v in (loads or {}).items()},
-                      "q0": q0 or {}, "v0": v0 or {}}, peaks=run.peaks)
+                          mesh_stiffness(system, omega * t), settings, peaks=run.peaks)
     if casm is not None:
         _expand_coupled(result, model, casm, [(0, n_steps, system, casm, paths.values(t))], X,
                         S, speed_rpm)
@@ -307,6 +319,24 @@ def build_result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings,
                             elements=functools.partial(elements_table, system.asm))
 
 
+def stored_result(recorder: Recorder, system, s0, stats, settings, span,
+                  peaks=None) -> SimulationResult:
+    """The :class:`SimulationResult` of a run streamed to ``recorder``'s directory (closed
+    here; its ``result.json`` and small tables written): its tables are read from there
+    when first asked for. ``span``: the first and last output time, s."""
+    d = recorder.close()
+    init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
+    bins = None
+    if peaks is not None:
+        bins = peak_table(peaks, system.asm.contacts.columns, float(span[1]))
+        settings = {**settings, "peak_bin": peaks.bin}
+    result = SimulationResult(t=None, settings=settings, initial_state=init, stats=stats,
+                              tables=StoredTables(d), stored=d, span=tuple(span),
+                              peak_bins=bins, elements=elements_table(system.asm))
+    result.save(d)  # the header and the small tables beside the streamed ones
+    return result
+
+
 def elements_table(asm: Assembly) -> pd.DataFrame:
     """One row per element with contact, spring or round-clearance rows (index ``element``):
     ``kind``, ``stage``, ``role``, ``planet`` (:attr:`SimulationResult.elements`)."""
@@ -363,29 +393,7 @@ class _Tables:
         return pd.DataFrame(self.S, index=self.index, columns=self.system.names)
 
     def events(self) -> pd.DataFrame:
-        c = self.system.asm.contacts
-        rd = self.system.asm.round
-        # contacts, then a round clearance per bearing (scipy; its x row names the bearing)
-        element = list(c.element) + (list(rd.element[::2]) if rd is not None else [])
-        contact = list(c.contact) + ["radial"] * (len(element) - len(c.element))
-        ev = self.ev
-        e = ev[:, 1].astype(np.int64)
-        state = np.array(["open", "closed"], dtype=object)
-
-        def labels(values):
-            # pandas 3: its string dtype given rather than inferred (-17 % on the table)
-            return pd.array(values, dtype="str") if _PANDAS_3 else values
-
-        return pd.DataFrame(dict(zip(EVENT_COLUMNS, (
-            ev[:, 0],
-            labels(np.array(element, dtype=object)[e]),
-            labels(np.array(contact, dtype=object)[e]),
-            labels(state[(ev[:, 2] > 0.5).astype(np.int64)]),
-            labels(state[(ev[:, 3] > 0.5).astype(np.int64)]),
-            ev[:, 4],
-            ev[:, 5],
-            ev[:, 6],
-            ev[:, 7]), strict=True)))
+        return event_table(self.system, self.ev)
 
     def forces(self) -> pd.DataFrame:
         data, labels = self.force_arrays or self._force_arrays()
@@ -394,47 +402,15 @@ class _Tables:
     def _force_arrays(self) -> tuple[np.ndarray, list[str]]:
         """The force table's values and labels, built segment by segment into the one output
         array (no temporaries of the run's length: a 600 s turbine run has 600 001 rows)."""
-        seg_systems, t, X, S = self.seg_systems, self.t, self.X, self.S
-        system = self.system
-        asm = system.asm
-        c = asm.contacts
-        # the force columns each element gave its contacts (Contacts.columns): one per mesh
-        # flank, one per bearing direction (its two dead-band sides combined; a polygon's
-        # facet forces resolved on the bearing's x and y axes)
-        names: dict[str, int] = {}
-        cols, rows_, weights = [], [], []
-        for e, parts in enumerate(c.columns):
-            for key, wgt in parts:
-                rows_.append(e)
-                cols.append(names.setdefault(key, len(names)))
-                weights.append(wgt)
-        proj = np.zeros((len(c.element), len(names)))
-        np.add.at(proj, (np.array(rows_, dtype=np.int64), np.array(cols, dtype=np.int64)),
-                  np.array(weights))
-        labels = list(names)
-        sp, rd = asm.springs, asm.round
-        n_sp = len(sp) if sp is not None else 0
-        n_rd = len(rd) if rd is not None else 0
-        if n_sp:
-            labels += [f"{el}.{ct}" for el, ct in zip(sp.element, sp.contact, strict=True)]
-        if n_rd:  # round clearances (scipy): k (r - c) + c_d r' if r > c
-            from .scipy_ref import _Round
-
-            labels += [f"{el}.{ct}" for el, ct in zip(rd.element, rd.contact, strict=True)]
-        out = np.empty((len(t), len(labels)))
-        nf = len(names)
-        # alternating mesh flanks: every contact's stiffness at each time
-        K = system.k if self.mesh_k is None else self.mesh_k
-        for k0, k1, sy in seg_systems:  # each segment with its geometry (turning rows: exact)
-            sl = slice(k0, k1 + 1)
-            Xs, ts = X[sl], t[sl] - t[k0]
-            P, R = sy.gaps(Xs, ts)
-            Ks = K if K.ndim == 1 else K[sl]
-            out[sl, :nf] = np.where(S[sl], Ks * P + system.c * R, 0.0) @ proj
-            if n_sp:
-                out[sl, nf:nf + n_sp] = sy.spring_forces(Xs, ts)
-            if n_rd:
-                rr = _Round(sy)
-                out[sl, nf + n_sp:] = rr.forces(Xs, rr.radius(Xs) > rr.c).reshape(len(Xs), -1)
-        # a bearing direction is a spring or a dead band, never both: the labels are distinct
-        return out, labels
+        fmap = ForceMap(self.system)
+        t = self.t
+        out = np.empty((len(t), len(fmap.labels)))
+        for k0, k1, sy in self.seg_systems:  # each segment with its geometry (turning: exact)
+            # a segment's rows after its first: the row where a re-basing starts it holds the
+            # state before the re-basing, the last of the stretch before (as the driver's
+            # sink writes it)
+            a = k0 + 1 if k0 > 0 else 0
+            sl = slice(a, k1 + 1)
+            K = None if self.mesh_k is None else self.mesh_k[sl]
+            fmap.rows(sy, self.X[sl], self.S[sl], t[sl] - t[k0], K, out=out[sl])
+        return out, fmap.labels

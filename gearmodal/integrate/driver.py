@@ -115,10 +115,12 @@ class Driver:
     dt : output step, s. x0, s0 : the state and contact state at time 0.
     peak_bin : width of the exact peaks' bins, s (:class:`~.peaks.PeakTracker`); ``None``:
         none tracked.
+    sink : a :class:`~.record.Recorder` the output rows and events go to as the run goes
+        (then the driver keeps none of them: :meth:`arrays` has no rows); ``None``: kept.
     """
 
     def __init__(self, name: str, dt: float, x0: np.ndarray, s0: np.ndarray,
-                 peak_bin: float | None = PEAK_BIN, **options):
+                 peak_bin: float | None = PEAK_BIN, sink=None, **options):
         self.method = get_method(name, options)
         self.options = options
         self.dt = float(dt)
@@ -132,6 +134,8 @@ class Driver:
         self.stats: dict = {}
         self.peak_bin = peak_bin
         self.peaks: PeakTracker | None = None  # made with the first system
+        self.sink = sink
+        self.n_events = 0
 
     def reserve(self, n_steps: int) -> None:
         """Hold the run's ``n_steps`` output steps in one array written as the run goes, so
@@ -144,10 +148,12 @@ class Driver:
         self._X = self._S = None
 
     def advance(self, system: PiecewiseLinearSystem, n_steps: int, F: np.ndarray,
-                azimuth0: float = 0.0, loads=None) -> None:
+                azimuth0: float = 0.0, loads=None, azimuths: np.ndarray | None = None) -> None:
         """Advance ``n_steps`` output steps with ``system`` and the force grid ``F``
         (``n_steps + 1`` rows), the input azimuth ``azimuth0`` (rad) at the first; ``loads``
-        (times from this call's start) as :class:`Method`."""
+        (times from this call's start) as :class:`Method`. ``azimuths``: the input azimuth
+        at each of the ``n_steps + 1`` times, for the sink's force rows (alternating
+        meshes)."""
         if self.peaks is None and self.peak_bin is not None:
             self.peaks = PeakTracker(system, self.peak_bin)
         X, S, ev, st = self.method.run(system, self.dt, n_steps, F, self.x, self.s,
@@ -155,8 +161,16 @@ class Driver:
                                        t0=self.k * self.dt, **self.options)
         ev = event_rows(ev)
         ev[:, 0] += self.k * self.dt
-        self._events.append(ev)
-        if self._store is not None:
+        self._event(ev)
+        new = not self.segments or self.segments[-1][2] is not system
+        if new:
+            system.azimuth0 = azimuth0  # the stretch's start (its tables' azimuths)
+        if self.sink is not None:
+            a = 0 if self.k == 0 else 1  # the first call writes the initial row too
+            seg_k0 = self.k if new else self.segments[-1][0]
+            self.sink.rows(self.k + a, X[a:], S[a:], system, seg_k0,
+                           None if azimuths is None else azimuths[a:])
+        elif self._store is not None:
             if self.k + n_steps >= len(self._store[0]):
                 raise ValueError(f"Driver: {self.k + n_steps} steps exceed the "
                                  f"{len(self._store[0]) - 1} reserved")
@@ -166,9 +180,12 @@ class Driver:
             self._X.append(X[1:])
             self._S.append(S[1:])
         self.x, self.s = X[-1].copy(), S[-1].copy()
-        if not self.segments or self.segments[-1][2] is not system:
+        if new:
+            if self.sink is not None and len(self.segments) > 1:
+                # its rows are written: a stretch's system (thousands on a long turbine run,
+                # 76 kB each) is not kept, but the first's (the run's structure)
+                self.segments[-1][2] = None
             self.segments.append([self.k, self.k, system])
-            system.azimuth0 = azimuth0  # the stretch's start (its tables' azimuths)
         self.k += n_steps
         self.segments[-1][1] = self.k
         for key, val in st.items():
@@ -188,11 +205,21 @@ class Driver:
             if self.peaks is not None and self.peaks.exact:  # the episodes it ends, begins
                 for row in ev:
                     row[6:8] = self.peaks.switched(int(row[1]), row[3] > 0.5, row[5], row[0])
-            self._events.append(ev)
+            self._event(ev)
         self.stats["rebase_switches"] = self.stats.get("rebase_switches", 0) + len(events)
 
+    def _event(self, ev: np.ndarray) -> None:
+        self.n_events += len(ev)
+        if self.sink is not None:
+            self.sink.events(ev)
+        else:
+            self._events.append(ev)
+
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(X, S, events)`` of the run so far."""
+        """``(X, S, events)`` of the run so far (with a sink: the rows and events went to it,
+        ``X`` and ``S`` are None and no events are returned)."""
+        if self.sink is not None:
+            return None, None, np.empty((0, 8))
         if self._store is not None:
             X, S = self._store[0][:self.k + 1], self._store[1][:self.k + 1]
         else:

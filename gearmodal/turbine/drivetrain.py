@@ -49,6 +49,7 @@ the direction of rotation: 0 puts planet 1 on blade 1's radius.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 import time
@@ -63,23 +64,26 @@ from ..errors import ModelError
 from ..integrate import (
     PEAK_BIN,
     Driver,
+    Recorder,
     SimulationResult,
     build_result,
     get_method,
     mesh_stiffness,
+    stored_result,
 )
 from ..integrate.azimuth import AzimuthAssembler
 from ..integrate.system import PiecewiseLinearSystem
 from ..massscale import scaled_mass
 from ..model.components import G_STANDARD, GRAVITY
-from ..result_io import read_header, write_header
+from ..result_io import TableWriter, read_header, write_header
 from ..static import equilibrium
 from .rotor import LOAD_COLUMNS
 from .turbine import RPM, TURBINE_COLUMNS, Turbine, TurbineResult, mark_cut_in
 from .wind import Wind
 
-#: layout version of :meth:`DrivetrainResult.save` (``drivetrain.json``)
-SAVE_VERSION = 1
+#: layout version of :meth:`DrivetrainResult.save` (``drivetrain.json``): 2 Parquet or CSV
+#: tables, 1 CSV only (still read)
+SAVE_VERSION = 2
 
 HOLDS = ("interpolate", "hold", "linear")
 #: time (s) over which a re-based reference speed takes up the drivetrain's rigid rotation
@@ -121,7 +125,7 @@ class DrivetrainResult:
         import matplotlib.pyplot as plt
 
         fig, axs = plt.subplots(3, 1, sharex=True, figsize=(9, 8))
-        d = self.turbine.loads
+        d = self.turbine.view(["rotor_speed_rpm", "power_W"])
         axs[0].plot(d.index, d["rotor_speed_rpm"])
         axs[0].set_ylabel("rotor speed [rpm]")
         axs[1].plot(d.index, d["power_W"] / 1e3)
@@ -131,12 +135,13 @@ class DrivetrainResult:
         fig.tight_layout()
         return fig
 
-    def save(self, directory) -> Path:
-        """Write the turbine loads (``turbine_loads.csv``, ``turbine.json``), the gearbox results
-        (``forces.csv``, ``events.csv``, ``q.csv``, ``v.csv``, ``settings.json``...: as
-        :meth:`SimulationResult.save`) and ``stats.json``: what :meth:`load` reads back."""
-        d = self.turbine.save(directory)
-        self.gearbox.save(d)
+    def save(self, directory, format: str = "parquet") -> Path:
+        """Write the turbine loads (``turbine_loads``, ``turbine.json``), the gearbox results
+        (``forces``, ``events``, ``q``, ``v``, ``settings.json``...: as
+        :meth:`SimulationResult.save`; Parquet, or CSV with ``format="csv"``) and
+        ``stats.json``: what :meth:`load` reads back."""
+        d = self.turbine.save(directory, format)
+        self.gearbox.save(d, format)
         (d / "stats.json").write_text(json.dumps(self.stats, indent=2))
         write_header(d, "DrivetrainResult", SAVE_VERSION, header="drivetrain.json")
         return d
@@ -146,9 +151,15 @@ class DrivetrainResult:
         """The run :meth:`save` wrote to ``directory``: turbine loads and the gearbox result,
         floats exact; an older layout is refused naming the directory."""
         d = Path(directory)
-        read_header(d, "DrivetrainResult", SAVE_VERSION, header="drivetrain.json")
+        read_header(d, "DrivetrainResult", (1, SAVE_VERSION), header="drivetrain.json")
         return cls(turbine=TurbineResult.load(d), gearbox=SimulationResult.load(d),
                    stats=json.loads((d / "stats.json").read_text()))
+
+
+def _first_mesh_k(system0, _system, azimuth):
+    """The stiffness rows of the force table at ``azimuth``: the first stretch's system's, as
+    the run held in memory takes them (:func:`gearmodal.integrate.mesh_stiffness`)."""
+    return mesh_stiffness(system0, azimuth)
 
 
 def _accelerating_equilibrium(asm, r: np.ndarray, speed_rpm: float, loads: dict) -> np.ndarray:
@@ -220,7 +231,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                         method: str = "exact", gravity: bool | float = True,
                         top_frequency_hz: float | None = None,
                         peak_bin: float | None = PEAK_BIN,
-                        progress=None, **options) -> DrivetrainResult:
+                        progress=None, out=None, **options) -> DrivetrainResult:
     """Run turbine and gearbox together from ``rotor_speed0_rpm`` for ``t_end`` s.
 
     Parameters
@@ -252,6 +263,10 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     peak_bin : width of the bins of the exact peaks, s, as :func:`gearmodal.simulate`'s;
         ``None``: no exact peaks (the sampled ones, about 22 % less integration CPU).
     progress : ``progress(i, n)`` per aerodynamic step (the solver never prints).
+    out : a directory the run streams to as it goes (:meth:`DrivetrainResult.save`'s layout:
+        Parquet row groups of the gearbox rows and of the turbine loads); the result reads
+        its tables from there when first asked for, so the run's memory does not grow with
+        its duration. ``None``: every row is held in memory.
     """
     for label, val in (("t_end", t_end), ("dt", dt), ("aero_dt", aero_dt),
                        ("rebase_speed", rebase_speed), ("rebase_angle", rebase_angle)):
@@ -319,6 +334,19 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     sg = math.copysign(1.0, g_ratio)
     gen = turbine.generator
     rot = turbine.rotor
+
+    def elastic(X):
+        """Elastic deflections and rates of states ``X`` (rows): the rigid rotation (re-based
+        at each re-basing) taken out, column by column."""
+        parts = []
+        for block in (X[:, :n], X[:, n:]):
+            phi = block @ (Mr / J)
+            e = np.array(block)
+            for j in np.flatnonzero(r):
+                e[:, j] -= r[j] * phi
+            parts.append(e)
+        return parts[0], parts[1]
+
     mount = math.radians(turbine.mounting_azimuth_deg) + 0.5 * math.pi  # planet 1 on blade 1
 
     def aero(ta, psi, om, reset):
@@ -359,10 +387,15 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     system, T0 = None, 0.0
     om_rho = om_f  # the speed of the last full spectral bound
     rows = []
+    loads_out = None  # the turbine loads' writer of a streamed run
+    if out is not None:
+        Path(out).mkdir(parents=True, exist_ok=True)
+        loads_out = TableWriter(out, "turbine_loads", TURBINE_COLUMNS[1:], dtype=None)
     run = None  # the integration Driver, from the start state on
     stats: dict = {"n_rebases": 0}
     prev = ld_next = None
-    az_grid = np.zeros(n_steps + 1)  # reference input azimuth (with the mounting) at each step
+    # reference input azimuth (with the mounting) at each step: a run held in memory
+    az_grid = np.zeros(n_steps + 1) if out is None else None
     # the output times from an aerodynamic step's start, and the fraction of the step, j / m:
     # at half the output step the shared times get the same load and azimuth to the bit (not
     # (t + tau) - t, rounded with t), so the exact method's solution does not depend on it
@@ -390,6 +423,10 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
         tg = gen.torque(w_gen) if on else 0.0
         rows.append((t, om / RPM, math.degrees(psi) % 360.0, on, tg, tg * w_gen,
                      *(ld[c] for c in LOAD_COLUMNS), fy, fz))
+        if loads_out is not None and len(rows) >= 1000:
+            loads_out.append_frame(pd.DataFrame(rows, columns=TURBINE_COLUMNS)
+                                   .set_index("time"))
+            rows = []
         # -- loads on the gearbox over this aerodynamic step (held or extrapolated)
         u_now = np.array([ld["torque_Nm"], fy, fz])
         if aero_hold == "interpolate":
@@ -432,8 +469,13 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 x[:n] = _accelerating_equilibrium(geo.assemble(psi_f + mount), r, om_f / RPM,
                                                   loads0)
                 s = system.penetration(x, psi_f + mount) > 0
-                run = Driver(method, dt, x, s, peak_bin=peak_bin, **options)
-                run.reserve(n_steps)
+                sink = None
+                if out is not None:
+                    sink = Recorder(out, system, dt, elastic=elastic,
+                                    mesh_k=functools.partial(_first_mesh_k, system))
+                run = Driver(method, dt, x, s, peak_bin=peak_bin, sink=sink, **options)
+                if sink is None:
+                    run.reserve(n_steps)
             else:
                 run.rebase(system, x, psi_f + mount)
                 stats["n_rebases"] += 1
@@ -446,8 +488,9 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                             + ([np.full(m_sub + 1, g)] if g else [])
                             + [np.ones(m_sub + 1)])
         a0 = 0 if kk == 0 else 1
-        az_grid[kk + a0:kk + m_sub + 1] = az0 + om_f * tau[a0:]
-        run.advance(system, m_sub, F, azimuth0=az0)
+        if az_grid is not None:
+            az_grid[kk + a0:kk + m_sub + 1] = az0 + om_f * tau[a0:]
+        run.advance(system, m_sub, F, azimuth0=az0, azimuths=az0 + om_f * tau)
         x = run.x.copy()
         if not (math.isfinite(om) and np.abs(x).max() <= DIVERGED):
             # no gearbox state reaches this (deflections from the re-based rotation, in m and
@@ -466,11 +509,10 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     X, S, events = run.arrays()
     segs = run.segments
     stats.update(run.stats)
-    t_grid = np.arange(n_steps + 1) * dt
     cpu = time.process_time() - cpu0
     clock["gearbox_s"] = cpu - clock["aero_s"] - clock["wind_s"] - clock["wind_setup_s"]
     stats.update(clock)
-    stats.update(cpu_s=cpu, n_events=len(events), n_steps=n_steps,
+    stats.update(cpu_s=cpu, n_events=run.n_events, n_steps=n_steps,
                  realtime_ratio=n_aero * aero_dt / max(cpu - clock["wind_setup_s"], 1e-12))
     settings = {"turbine": turbine.name, "gearbox": getattr(gearbox, "name", ""),
                 "t_end": t_end, "dt": dt, "aero_dt": aero_dt, "aero_hold": aero_hold,
@@ -482,17 +524,24 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
                 "shaft_end_force": "on the carrier" if bending else "not modelled (the first "
                 "stage's carrier has no translation)",
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
+    if out is not None:
+        sim = stored_result(run.sink, segs[0][2], run.s0, stats, settings,
+                            (0.0, n_steps * dt), peaks=run.peaks)
+        loads_out.append_frame(pd.DataFrame(rows, columns=TURBINE_COLUMNS).set_index("time"))
+        loads_out.close()
+        tres = TurbineResult(loads=None, cut_in_time=cut_in, settings=settings, stored=out)
+        res = DrivetrainResult(turbine=tres, gearbox=sim, stats=stats)
+        res.save(out)  # the headers and the small tables beside the streamed ones
+        return res
+    t_grid = np.arange(n_steps + 1) * dt
     sim = build_result([tuple(sg_) for sg_ in segs], t_grid, X, S, events, run.s0, stats,
                        mesh_stiffness(segs[0][2], az_grid), settings, peaks=run.peaks)
     # elastic deflections: the rigid rotation (re-based at each re-basing) taken out, column
     # by column (no run-length temporaries: a 600 s run has 600 001 rows)
     idx = pd.Index(t_grid, name="time")
-    for name, block in (("q", X[:, :n]), ("v", X[:, n:])):
-        phi = block @ (Mr / J)
-        elastic = np.array(block)
-        for j in np.flatnonzero(r):
-            elastic[:, j] -= r[j] * phi
-        setattr(sim, name, pd.DataFrame(elastic, index=idx, columns=asm0.dof_names,
+    q, v = elastic(X)
+    for name, block in (("q", q), ("v", v)):
+        setattr(sim, name, pd.DataFrame(block, index=idx, columns=asm0.dof_names,
                                         copy=False))
     loads = pd.DataFrame(rows, columns=TURBINE_COLUMNS).set_index("time")
     tres = TurbineResult(loads=loads, cut_in_time=cut_in, settings=settings)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,7 +35,7 @@ import pandas as pd
 
 from ..errors import ModelError
 from ..model.schema import REQUIRED, Field, Table
-from ..result_io import read_csv
+from ..result_io import decimated, read_table, table_path, write_table
 from .airfoil import Airfoil
 from .generator import InductionGenerator
 from .rotor import LOAD_COLUMNS, Rotor
@@ -208,19 +209,36 @@ class TurbineResult:
     ``thrust_N, torque_Nm, shear_y_N, shear_z_N, tilt_Nm, yaw_Nm`` and the shaft-end force on
     the gearbox ``rear_force_y_N, rear_force_z_N``."""
 
-    loads: pd.DataFrame
+    loads: pd.DataFrame | None
     cut_in_time: float | None
     settings: dict = field(default_factory=dict)
+    #: the directory a streamed or loaded run's ``turbine_loads`` table is read from
+    stored: Path | None = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self):
+        if self.stored is not None:
+            self.stored = Path(self.stored)
+        elif self.loads is None:
+            raise TypeError("TurbineResult needs loads (or stored=DIR)")
 
     def to_frame(self) -> pd.DataFrame:
         return self.loads
+
+    def view(self, columns: list[str], max_rows: int | None = 20_000) -> pd.DataFrame:
+        """``columns`` of :attr:`loads` for a figure (a stored run's read decimated, every
+        bucket keeping its extremes: :func:`gearmodal.result_io.decimated`; ``max_rows=None``:
+        every row of them, read without the other columns)."""
+        if self.stored is not None and self.__dict__.get("_loads") is None:
+            return decimated(self.stored, "turbine_loads", list(columns), max_rows)
+        return self.loads[list(columns)]
 
     def plot(self):
         """Rotor speed, power and shaft-end force against time; returns the Figure."""
         import matplotlib.pyplot as plt
 
         fig, axs = plt.subplots(3, 1, sharex=True, figsize=(8, 7))
-        d = self.loads
+        d = self.view(["rotor_speed_rpm", "power_W", "torque_Nm", "rear_force_y_N",
+                       "rear_force_z_N"])
         axs[0].plot(d.index, d["rotor_speed_rpm"])
         axs[0].set_ylabel("rotor speed [rpm]")
         axs[1].plot(d.index, d["power_W"] / 1e3, label="electrical")
@@ -237,12 +255,22 @@ class TurbineResult:
         fig.tight_layout()
         return fig
 
-    def save(self, directory) -> Path:
-        """Write ``turbine_loads.csv`` and ``turbine.json`` (settings, cut-in time):
-        what :meth:`load` reads back."""
+    def save(self, directory, format: str = "parquet") -> Path:
+        """Write ``turbine_loads`` (Parquet, or CSV with ``format="csv"``) and
+        ``turbine.json`` (settings, cut-in time): what :meth:`load` reads back."""
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
-        self.loads.to_csv(d / "turbine_loads.csv", index_label="time")
+        src = None
+        if self.stored is not None and self.__dict__.get("_loads") is None:
+            src = table_path(self.stored, "turbine_loads")
+        if src is not None and src.suffix == f".{format}":
+            if src.resolve() != (d / src.name).resolve():
+                shutil.copyfile(src, d / src.name)
+        else:
+            write_table(self.loads, d, "turbine_loads", format)
+        other = d / f"turbine_loads.{'csv' if format == 'parquet' else 'parquet'}"
+        if other.exists():
+            other.unlink()
         (d / "turbine.json").write_text(json.dumps(
             {**self.settings, "cut_in_time": self.cut_in_time}, indent=2, default=str))
         return d
@@ -251,12 +279,10 @@ class TurbineResult:
     def load(cls, directory) -> TurbineResult:
         """The result :meth:`save` wrote to ``directory`` (floats exact)."""
         d = Path(directory)
-        loads = read_csv(d / "turbine_loads.csv", index_col="time")
-        if "generator_connected" in loads:
-            loads["generator_connected"] = loads["generator_connected"].astype(bool)
+        table_path(d, "turbine_loads")  # there (a missing table named now, not later)
         meta = json.loads((d / "turbine.json").read_text())
         cut = meta.pop("cut_in_time", None)
-        return cls(loads=loads, cut_in_time=cut, settings=meta)
+        return cls(loads=None, cut_in_time=cut, settings=meta, stored=d)
 
     def gearbox_loads(self, ratio: float | None = None) -> dict:
         """Loads for :func:`gearmodal.simulate` on the drivetrain model (``600kw.toml``):
@@ -269,6 +295,27 @@ class TurbineResult:
                 "generator.torque": pd.Series(-d["generator_torque_Nm"].to_numpy(), index=idx),
                 "stage1.carrier.force_x": pd.Series(d["rear_force_y_N"].to_numpy(), index=idx),
                 "stage1.carrier.force_y": pd.Series(d["rear_force_z_N"].to_numpy(), index=idx)}
+
+
+def _loads_property() -> property:
+    """:attr:`TurbineResult.loads`: a stored run's table is read when first asked for."""
+
+    def get(self):
+        d = self.__dict__
+        if d.get("_loads") is None and d.get("stored") is not None:
+            df = read_table(d["stored"], "turbine_loads")
+            if "generator_connected" in df:
+                df["generator_connected"] = df["generator_connected"].astype(bool)
+            d["_loads"] = df
+        return d.get("_loads")
+
+    def set_(self, val):
+        self.__dict__["_loads"] = val
+
+    return property(get, set_, doc="The turbine's time series at the aerodynamic rate.")
+
+
+TurbineResult.loads = _loads_property()
 
 
 def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 0.02,
