@@ -18,7 +18,6 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 from scipy.linalg import blas
-from scipy.optimize import linear_sum_assignment
 
 from .assembly import reduction
 from .errors import ModelError
@@ -458,6 +457,8 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
             mm = np.abs(blas.zgemm(1.0, prev_M, phi, trans_a=2)) ** 2 / np.outer(prev_norm, norm)
             # one-to-one assignment: maximise total MAC, tie-broken by frequency closeness
             cost = -mm + 1e-6 * np.abs(freqs[i - 1][:, None] - f[None, :]) / (1.0 + f.max())
+            from scipy.optimize import linear_sum_assignment  # loaded when needed
+
             _, col = linear_sum_assignment(cost)
             f, z, phi, Mphi, norm = f[col], z[col], phi[:, col], Mphi[:, col], norm[col]
             mm = mm[:, col]

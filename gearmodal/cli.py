@@ -159,6 +159,8 @@ def cmd_simulate(args) -> int:
     else:
         res = scene.simulate(out=into)
     fmt = args.format
+    if scene.wind is not None:
+        scene.wind.release()  # the run is over: its turbulence box is not kept for the figures
     if scene.turbine is not None:
         run = res
         sim = run.gearbox

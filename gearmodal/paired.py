@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
 
 from .errors import ModelError
 
@@ -46,6 +45,8 @@ def paired_ratio(a, b, level: float = 0.95) -> dict:
         return {"ratio": math.exp(mean), "low": math.nan, "high": math.nan, "n": 1,
                 "differs": False, "seeds_needed": math.nan}
     sd = float(d.std(ddof=1))
+    from scipy import stats  # loaded when needed (scipy.stats: 30 MB of a process)
+
     half = float(stats.t.ppf(0.5 + level / 2, n - 1)) * sd / math.sqrt(n)
     need = math.nan
     if mean != 0.0:

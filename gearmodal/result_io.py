@@ -16,6 +16,7 @@ table read a decimated view (:func:`decimated`) that keeps every bucket's extrem
 from __future__ import annotations
 
 import json
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -24,14 +25,20 @@ import pandas as pd
 
 from .errors import ModelError
 
-__all__ = ["FORMATS", "TableWriter", "decimated", "read_csv", "read_header", "read_table",
-           "table_chunks", "write_header", "write_table"]
+__all__ = ["FORMATS", "VIEW_ROWS", "TableWriter", "decimated", "read_csv", "read_header",
+           "read_table", "table_chunks", "table_path", "write_header", "write_table"]
 
 HEADER = "result.json"
 #: the formats results save their tables in
 FORMATS = ("parquet", "csv")
-#: rows per Parquet row group of a streamed table (a group of a 36-column table: 2.9 MB)
-GROUP_ROWS = 10_000
+#: rows per Parquet row group of a streamed table (a group of a 36-column table: 1.4 MB)
+GROUP_ROWS = 5_000
+#: row groups per part file of a long streamed table (:class:`TableWriter`): 100 s of a run
+#: at 1 ms
+PART_GROUPS = 20
+#: rows of a figure's view of a long table (:func:`decimated`): about a thousand buckets of
+#: a few columns, a bucket per pixel of a figure 9 inches wide at 130 dpi
+VIEW_ROWS = 8_000
 #: Parquet settings: zstd, floats byte-stream split (3.5x smaller than CSV on the turbine
 #: run's q, v and forces; float64 noise bits bound it), no dictionaries for floats
 _PARQUET = {"compression": "zstd"}
@@ -87,6 +94,17 @@ def _check_format(fmt: str) -> None:
         raise ModelError("format", f"= {fmt!r}: must be one of {', '.join(map(repr, FORMATS))}")
 
 
+def _arrow_array(values):
+    """An Arrow array of a numpy column: floats as they are (NaN stays NaN, not null), text
+    as strings."""
+    import pyarrow as pa
+
+    v = np.asarray(values)
+    if v.dtype == object or v.dtype.kind in "US":
+        return pa.array(v.astype(str).astype(object), type=pa.string())
+    return pa.array(v)
+
+
 def _arrow_table(df: pd.DataFrame, index_label: str | None):
     import pyarrow as pa
 
@@ -96,9 +114,9 @@ def _arrow_table(df: pd.DataFrame, index_label: str | None):
         series.insert(0, (index_label, df.index.to_series()))
     for name, col in series:
         if col.dtype == object or pd.api.types.is_string_dtype(col.dtype):
-            cols.append(pa.array(col.astype(str).to_numpy(dtype=object), type=pa.string()))
+            cols.append(_arrow_array(col.astype(str).to_numpy(dtype=object)))
         else:
-            cols.append(pa.array(col.to_numpy(), from_pandas=True))
+            cols.append(_arrow_array(col.to_numpy()))
         names.append(name)
     return pa.Table.from_arrays(cols, names=names)
 
@@ -128,18 +146,20 @@ def write_table(df: pd.DataFrame, directory, name: str, fmt: str = "parquet",
     import pyarrow.parquet as pq
 
     p = d / f"{name}.parquet"
+    remove_table(p)  # a folder of parts a streamed run left
     table = _arrow_table(df, index_label)
     pq.write_table(table, p, row_group_size=GROUP_ROWS, **_parquet_options(table))
     return p
 
 
 def table_path(directory, name: str) -> Path:
-    """``directory/name.parquet`` or, where only that exists, ``name.csv``; a missing table is
-    a :class:`ModelError` naming it."""
+    """``directory/name.parquet`` (a file, or a folder of parts: a long streamed table) or,
+    where only that exists, ``name.csv``; a missing table is a :class:`ModelError` naming
+    it."""
     d = Path(directory)
     for ext in ("parquet", "csv"):
         p = d / f"{name}.{ext}"
-        if p.is_file():
+        if p.exists():
             return p
     raise ModelError("directory", f"= {str(d)!r}: {name}.parquet (or {name}.csv) is missing")
 
@@ -156,13 +176,41 @@ def read_table(directory, name: str, index_col: str | None = "time",
 
     try:
         want = None if columns is None else ([index_col] if index_col else []) + list(columns)
-        df = pq.read_table(p, columns=want).to_pandas()
+        parts = [pq.read_table(f, columns=want).to_pandas() for f in parquet_parts(p)]
+        df = pd.concat(parts, ignore_index=True) if len(parts) > 1 else parts[0]
     except (OSError, ValueError) as e:  # pyarrow's errors derive from these
         raise ModelError("directory", f"= {str(p.parent)!r}: {p.name} is unreadable "
                          f"({str(e).splitlines()[0][:200]})") from None
     if index_col is not None:
         df = df.set_index(index_col)
     return df
+
+
+def parquet_parts(path: Path) -> list[Path]:
+    """The files of a Parquet table in row order: the file itself, or a folder's parts."""
+    p = Path(path)
+    return sorted(p.glob("part-*.parquet")) if p.is_dir() else [p]
+
+
+def copy_table(src: Path, directory) -> Path:
+    """Copy a stored table (a file or a folder of parts) into ``directory``."""
+    dst = Path(directory) / src.name
+    if dst.exists() and dst.is_dir():
+        shutil.rmtree(dst)
+    if src.is_dir():
+        shutil.copytree(src, dst)
+    else:
+        shutil.copyfile(src, dst)
+    return dst
+
+
+def remove_table(path: Path) -> None:
+    """Remove a stored table (a file or a folder of parts) if it is there."""
+    p = Path(path)
+    if p.is_dir():
+        shutil.rmtree(p)
+    elif p.exists():
+        p.unlink()
 
 
 def table_chunks(directory, name: str, columns: list[str] | None = None,
@@ -175,49 +223,63 @@ def table_chunks(directory, name: str, columns: list[str] | None = None,
         return
     import pyarrow.parquet as pq
 
-    f = pq.ParquetFile(p)
     want = None if columns is None else [index_col, *columns]
-    for g in range(f.num_row_groups):
-        yield f.read_row_group(g, columns=want).to_pandas().set_index(index_col)
+    for part in parquet_parts(p):
+        f = pq.ParquetFile(part)
+        for g in range(f.num_row_groups):
+            yield f.read_row_group(g, columns=want).to_pandas().set_index(index_col)
 
 
-def decimated(directory, name: str, columns: list[str], max_rows: int | None = 20_000,
+def decimated(directory, name: str, columns: list[str], max_rows: int | None = VIEW_ROWS,
               index_col: str = "time") -> pd.DataFrame:
     """A view of the stored table ``name`` for figures, at most about ``max_rows`` rows: the
     rows are cut into buckets and each keeps the rows where one of ``columns`` is largest or
-    smallest, so no peak or dip of a plotted column is lost. Read a row group at a time.
-    ``max_rows=None``: every row of ``columns``."""
+    smallest, so no peak or dip of a plotted column is lost. Read a row group at a time,
+    straight into arrays. ``max_rows=None``: every row of ``columns``."""
+    columns = list(columns)
     p = table_path(directory, name)
-    if max_rows is None:
-        n = 0
-    elif p.suffix == ".csv":
-        n = sum(1 for _ in open(p)) - 1
+    if p.suffix == ".csv":
+        full = read_table(directory, name, index_col=index_col, columns=columns)
+        groups = [(full.index.to_numpy(dtype=float), full.to_numpy(dtype=float))]
+        n = len(full)
     else:
         import pyarrow.parquet as pq
 
-        n = pq.ParquetFile(p).metadata.num_rows
+        files = [pq.ParquetFile(f) for f in parquet_parts(p)]
+        n = sum(f.metadata.num_rows for f in files)
+
+        def read():
+            for f in files:
+                for g in range(f.num_row_groups):
+                    tb = f.read_row_group(g, columns=[index_col, *columns])
+                    yield (tb.column(0).to_numpy(),
+                           np.column_stack([tb.column(j + 1).to_numpy().astype(float)
+                                            for j in range(len(columns))])
+                           if columns else np.empty((tb.num_rows, 0)))
+
+        groups = read()
     per = 1 if max_rows is None else max(1, int(np.ceil(n * 2 * max(len(columns), 1)
                                                          / max_rows)))
-    parts = []
-    for chunk in table_chunks(directory, name, columns, index_col):
-        if per == 1:
-            parts.append(chunk)
-            continue
-        v = chunk.to_numpy(dtype=float)
-        keep = set()
-        for a in range(0, len(v), per):
-            block = v[a:a + per]
-            with np.errstate(invalid="ignore"):
-                for j in range(block.shape[1]):
-                    col = block[:, j]
-                    if np.isnan(col).all():
-                        continue
-                    keep.update((a + int(np.nanargmax(col)), a + int(np.nanargmin(col))))
-        keep.update((0, len(v) - 1))
-        parts.append(chunk.iloc[sorted(keep)])
-    if not parts:
-        return pd.DataFrame(columns=columns)
-    return pd.concat(parts)
+    ts, vs = [], []
+    for t, V in groups:
+        if per > 1 and len(t) and V.shape[1]:
+            nb = -(-len(t) // per)
+            pad = nb * per - len(t)
+            hi = np.pad(np.where(np.isnan(V), -np.inf, V), ((0, pad), (0, 0)),
+                        constant_values=-np.inf).reshape(nb, per, -1)
+            lo = np.pad(np.where(np.isnan(V), np.inf, V), ((0, pad), (0, 0)),
+                        constant_values=np.inf).reshape(nb, per, -1)
+            base = (np.arange(nb) * per)[:, None]
+            keep = np.unique(np.concatenate([(base + hi.argmax(axis=1)).ravel(),
+                                             (base + lo.argmin(axis=1)).ravel(),
+                                             [0, len(t) - 1]]))
+            keep = keep[keep < len(t)]
+            t, V = t[keep], V[keep]
+        ts.append(t)
+        vs.append(V)
+    t = np.concatenate(ts) if ts else np.empty(0)
+    V = np.concatenate(vs) if vs else np.empty((0, len(columns)))
+    return pd.DataFrame(V, index=pd.Index(t, name=index_col), columns=columns)
 
 
 class TableWriter:
@@ -225,20 +287,26 @@ class TableWriter:
     goes (a run's rows are never all in memory). ``columns``: the value columns, after
     ``index_label``; ``dtype``: ``float`` or ``bool`` values, or ``None`` for a frame of mixed
     columns (:meth:`append_frame`). :meth:`close` writes the last group (an empty table still
-    gets its file)."""
+    gets its file).
+
+    A Parquet writer holds every row group's description until it closes (0.8 kB per column
+    and group: 80 MB for an hour of the turbine's rows at 1 ms), so a long table is written
+    in parts of :data:`PART_GROUPS` groups, each closed when full: ``name.parquet`` is then a
+    folder of ``part-00000.parquet``... in row order (as Spark and Dask write them;
+    ``pandas.read_parquet`` reads the folder), a single file when one part holds it all."""
 
     def __init__(self, directory, name: str, columns: list[str], dtype=float,
                  index_label: str = "time"):
-        import pyarrow as pa
-
-        self.path = Path(directory) / f"{name}.parquet"
+        self.directory = Path(directory)
+        self.path = self.directory / f"{name}.parquet"
+        self._parts = self.directory / f".{name}.parquet.parts"
+        remove_table(self._parts)
         self.columns = [str(c) for c in columns]
         self.index_label = index_label
         self.dtype = dtype
-        kind = pa.bool_() if dtype is bool else pa.float64()
-        self.schema = None if dtype is None else pa.schema(
-            [(index_label, pa.float64())] + [(c, kind) for c in self.columns])
         self._writer = None
+        self._n_parts = 0
+        self._groups = 0
         self._t: list[np.ndarray] = []
         self._rows: list = []
         self._n = 0
@@ -263,33 +331,52 @@ class TableWriter:
         if self._n >= GROUP_ROWS:
             self._flush()
 
-    def _flush(self) -> None:
+    def _table(self):
         import pyarrow as pa
+
+        if self.dtype is None:
+            df = pd.concat(self._rows) if self._rows else pd.DataFrame(
+                {c: np.empty(0) for c in self.columns},
+                index=pd.Index(np.empty(0), name=self.index_label))
+            return _arrow_table(df, self.index_label)
+        t = np.concatenate(self._t) if self._t else np.empty(0)
+        V = np.concatenate(self._rows) if self._rows else np.empty((0, len(self.columns)),
+                                                                  dtype=self.dtype)
+        return pa.Table.from_arrays([_arrow_array(t)] + [_arrow_array(V[:, j])
+                                                         for j in range(V.shape[1])],
+                                    names=[self.index_label, *self.columns])
+
+    def _flush(self) -> None:
         import pyarrow.parquet as pq
 
         if self._n == 0 and self._writer is not None:
             return
-        if self.dtype is None:
-            df = pd.concat(self._rows) if self._rows else pd.DataFrame(columns=self.columns)
-            table = _arrow_table(df, self.index_label)
-        else:
-            t = np.concatenate(self._t) if self._t else np.empty(0)
-            V = np.concatenate(self._rows) if self._rows else np.empty((0, len(self.columns)),
-                                                                      dtype=self.dtype)
-            table = pa.Table.from_arrays([pa.array(t)] + [pa.array(V[:, j])
-                                                          for j in range(V.shape[1])],
-                                         schema=self.schema)
+        table = self._table()
         if self._writer is None:
-            self._writer = pq.ParquetWriter(self.path, table.schema,
-                                            **_parquet_options(table))
+            self._parts.mkdir(parents=True, exist_ok=True)
+            self._writer = pq.ParquetWriter(
+                self._parts / f"part-{self._n_parts:05d}.parquet", table.schema,
+                **_parquet_options(table))
+            self._n_parts += 1
         self._writer.write_table(table, row_group_size=max(len(table), 1))
         self.n_rows += len(table)
         self._t, self._rows, self._n = [], [], 0
+        self._groups += 1
+        if self._groups % PART_GROUPS == 0:  # a part full: its descriptions freed
+            self._writer.close()
+            self._writer = None
 
     def close(self) -> Path:
-        """Write what is left and close the file; returns its path."""
-        self._flush()
+        """Write what is left and close the table; returns its path."""
+        if self._n or self._n_parts == 0:
+            self._flush()
         if self._writer is not None:
             self._writer.close()
             self._writer = None
+        remove_table(self.path)
+        if self._n_parts == 1:
+            (self._parts / "part-00000.parquet").replace(self.path)
+            self._parts.rmdir()
+        else:
+            self._parts.replace(self.path)
         return self.path

@@ -131,20 +131,19 @@ def test_turbulence_box_does_not_depend_on_the_blas_threads(monkeypatch):
     different run (146.8 against 144.0 kN tooth peak on the 500 Hz rung). PyConTurb runs with
     one BLAS thread even when the user allows two (checked directly too: on a one-core
     machine two threads may not round differently)."""
-    import pyconturb
     from threadpoolctl import threadpool_info, threadpool_limits
 
     from gearmodal.turbine import wind as wind_mod
 
     seen = []
-    gen_turb = pyconturb.gen_turb
+    kaimal_box = wind_mod.kaimal_box
 
     def spy(*args, **kwargs):
         seen.append(max(p["num_threads"] for p in threadpool_info()
                         if p["user_api"] == "blas"))
-        return gen_turb(*args, **kwargs)
+        return kaimal_box(*args, **kwargs)
 
-    monkeypatch.setattr(pyconturb, "gen_turb", spy)
+    monkeypatch.setattr(wind_mod, "kaimal_box", spy)
     kw = dict(mean_speed=10.0, turbulence_intensity=0.12, seed=1, duration=30.0)
     boxes = []
     for threads in (1, 2):
@@ -155,40 +154,36 @@ def test_turbulence_box_does_not_depend_on_the_blas_threads(monkeypatch):
     assert seen == [1, 1]
 
 
-def test_turbulence_box_is_pyconturbs_frequency_by_frequency(monkeypatch):
-    """The box's coherence in chunks of frequencies (all in one, or as many as fit in 128 MiB)
-    is PyConTurb's frequency-by-frequency box to rounding. PyConTurb 2.7's own chunked loop
-    gives the frequencies at multiples of the chunk another frequency's coherence; the
-    aligned chunk indices (wind.aligned_chunks) make any chunk size right."""
+def test_turbulence_box_is_pyconturbs_to_the_bit(monkeypatch):
+    """wind.kaimal_box (gearmodal's own Veers generator: phases and coherence a chunk of
+    frequencies at a time, each column's inverse FFT straight into the box) is PyConTurb's
+    gen_turb, frequency by frequency, to the bit: odd and even step counts, any chunk size
+    (one, uneven, all at once), two grids."""
+    pytest.importorskip("pyconturb", reason="the reference generator: pip install "
+                        "'gearmodal[wind]' (installed in CI)")
     from pyconturb import gen_spat_grid, gen_turb
+    from pyconturb.sig_models import constant_sig
+    from pyconturb.wind_profiles import constant_profile
 
     from gearmodal.turbine import wind as wind_mod
 
-    kw = dict(mean_speed=10.0, hub_height=40.0, turbulence_intensity=0.12, duration=20.0,
-              dt=0.2, grid_points=4, seed=3)
-    nt = 101
-    assert wind_mod.coherence_chunk(nt, 48) == 51
-    # 600 s at 0.1 s on 7 x 7 points: 520 MB for all 3 001 frequencies, 776 per 128 MiB
-    assert wind_mod.coherence_chunk(6001, 147) == 776
-    fast = Wind(**kw)._turbulence()[3]
-    monkeypatch.setattr(wind_mod, "_BOXES", {})  # each box generated, none from the cache
-    monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n: 1)
-    slow = Wind(**kw)._turbulence()[3]
-    np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-12 * np.abs(slow).max())
-    for chunk in (2, 16, 50):  # chunk sizes that split the 51 frequencies unevenly
-        monkeypatch.setattr(wind_mod, "_BOXES", {})
-        monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n, c=chunk: c)
-        np.testing.assert_allclose(Wind(**kw)._turbulence()[3], slow, rtol=0,
-                                   atol=1e-12 * np.abs(slow).max())
-    # the upstream loop without the aligned indices: wrong at the multiples of the chunk
-    spat = gen_spat_grid(np.linspace(-20, 20, 4), 40.0 + np.linspace(-20, 20, 4))
-    args = dict(T=20.2, nt=nt, seed=3, u_ref=10.0, z_ref=40.0)
-    one = gen_turb(spat, nf_chunk=1, **args).to_numpy()
-    plain = gen_turb(spat, nf_chunk=16, **args).to_numpy()
-    assert np.abs(plain - one).max() > 1e-3 * np.abs(one).max()
-    with wind_mod.aligned_chunks():
-        fixed = gen_turb(spat, nf_chunk=16, **args).to_numpy()
-    np.testing.assert_allclose(fixed, one, rtol=0, atol=1e-12 * np.abs(one).max())
+    # 600 s at 0.1 s on 7 x 7 points: 48 frequencies per 8 MiB, all of a short box's
+    assert wind_mod.coherence_chunk(6001, 147) == 48
+    assert wind_mod.coherence_chunk(101, 48) == 51
+    for ny, hub in ((4, 40.0), (3, 80.0)):  # hub heights below and above 60 m (Lambda_1)
+        y = np.linspace(-20, 20, ny)
+        z = hub + np.linspace(-20, 20, ny)
+        spat = gen_spat_grid(y, z)
+        sig = [1.2, 0.96, 0.6]
+        for nt in (101, 100):
+            ref = gen_turb(spat, T=nt * 0.2, nt=nt, seed=3, u_ref=10.0, z_ref=hub,
+                           wsp_func=constant_profile, sig_func=constant_sig, sig_vals=sig,
+                           comps=[0, 1, 2], nf_chunk=1).to_numpy()
+            ref = ref.reshape(nt, ny, ny, 3).transpose(0, 3, 1, 2)
+            for chunk in (1, 16, 51):
+                monkeypatch.setattr(wind_mod, "coherence_chunk", lambda nt, n, c=chunk: c)
+                box = wind_mod.kaimal_box(y, z, nt, 0.2, 3, 10.0, sig)
+                np.testing.assert_array_equal(box, ref)
 
 
 def test_turbine_loads_drive_the_gearbox():

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -15,9 +14,13 @@ import pandas as pd
 from ..errors import ModelError
 from ..fatigue import N_REF, WOEHLER, damage_equivalent_load
 from ..result_io import (
+    VIEW_ROWS,
+    copy_table,
     decimated,
+    parquet_parts,
     read_header,
     read_table,
+    remove_table,
     table_chunks,
     table_path,
     write_header,
@@ -555,10 +558,10 @@ class SimulationResult:
             if p.suffix == ".parquet":
                 import pyarrow.parquet as pq
 
-                return [c for c in pq.read_schema(p).names if c != "time"]
+                return [c for c in pq.read_schema(parquet_parts(p)[0]).names if c != "time"]
         return list(self.forces.columns)
 
-    def view(self, name: str, columns: list[str], max_rows: int = 20_000) -> pd.DataFrame:
+    def view(self, name: str, columns: list[str], max_rows: int = VIEW_ROWS) -> pd.DataFrame:
         """``columns`` of the table ``name`` (``q``, ``v``, ``forces``) for a figure: at most
         about ``max_rows`` rows, each bucket of rows keeping those where a column is largest
         or smallest (:func:`gearmodal.result_io.decimated`; a stored run is read a row group
@@ -595,16 +598,14 @@ class SimulationResult:
             if same and src is not None and src.suffix == f".{format}":
                 continue  # streamed here
             if src is not None and src.suffix == f".{format}":
-                shutil.copyfile(src, d / src.name)
+                copy_table(src, d)
                 continue
             if name == "events":
                 write_table(self.events, d, name, format, index_label=None)
             else:
                 write_table(getattr(self, name), d, name, format)
         for name in (*STORED_TABLES, "events"):  # one format per directory
-            other = d / f"{name}.{'csv' if format == 'parquet' else 'parquet'}"
-            if other.exists():
-                other.unlink()
+            remove_table(d / f"{name}.{'csv' if format == 'parquet' else 'parquet'}")
         if self.peak_bins is not None:
             write_table(self.peak_bins, d, "peak_bins", format, index_label=None)
         if self.elements is not None:

@@ -23,7 +23,6 @@ series, which it checks.
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from ..errors import ModelError
 from .loads import force_at
@@ -39,6 +38,9 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
               x0: np.ndarray, s0: np.ndarray, scipy_method: str = "RK45", rtol: float = 1e-6,
               atol: float = 1e-12, max_events: int = 10_000_000, azimuth0: float = 0.0,
               loads=None, **options):
+    from scipy.integrate import solve_ivp  # here: scipy.integrate and what it loads cost a
+    # process 30 MB that a run of another method need not pay
+
     n = system.n
     turning = system.turning
     if turning and system.asm.round is not None:

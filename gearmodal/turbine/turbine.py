@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import json
 import math
-import shutil
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,7 +34,15 @@ import pandas as pd
 
 from ..errors import ModelError
 from ..model.schema import REQUIRED, Field, Table
-from ..result_io import decimated, read_table, table_path, write_table
+from ..result_io import (
+    VIEW_ROWS,
+    copy_table,
+    decimated,
+    read_table,
+    remove_table,
+    table_path,
+    write_table,
+)
 from .airfoil import Airfoil
 from .generator import InductionGenerator
 from .rotor import LOAD_COLUMNS, Rotor
@@ -224,7 +231,7 @@ class TurbineResult:
     def to_frame(self) -> pd.DataFrame:
         return self.loads
 
-    def view(self, columns: list[str], max_rows: int | None = 20_000) -> pd.DataFrame:
+    def view(self, columns: list[str], max_rows: int | None = VIEW_ROWS) -> pd.DataFrame:
         """``columns`` of :attr:`loads` for a figure (a stored run's read decimated, every
         bucket keeping its extremes: :func:`gearmodal.result_io.decimated`; ``max_rows=None``:
         every row of them, read without the other columns)."""
@@ -265,12 +272,10 @@ class TurbineResult:
             src = table_path(self.stored, "turbine_loads")
         if src is not None and src.suffix == f".{format}":
             if src.resolve() != (d / src.name).resolve():
-                shutil.copyfile(src, d / src.name)
+                copy_table(src, d)
         else:
             write_table(self.loads, d, "turbine_loads", format)
-        other = d / f"turbine_loads.{'csv' if format == 'parquet' else 'parquet'}"
-        if other.exists():
-            other.unlink()
+        remove_table(d / f"turbine_loads.{'csv' if format == 'parquet' else 'parquet'}")
         (d / "turbine.json").write_text(json.dumps(
             {**self.settings, "cut_in_time": self.cut_in_time}, indent=2, default=str))
         return d

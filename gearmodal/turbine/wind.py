@@ -23,8 +23,6 @@ form).
 
 from __future__ import annotations
 
-import contextlib
-import functools
 from dataclasses import dataclass
 
 import numba
@@ -33,64 +31,106 @@ import numpy as np
 from ..errors import ModelError
 from ..model.schema import Field, Table
 
-#: bytes the coherence matrices of one chunk of frequencies may take (PyConTurb ``nf_chunk``)
-COHERENCE_BYTES = 128 * 2**20
+#: bytes the coherence matrices of one chunk of frequencies may take (:func:`kaimal_box`):
+#: 8 MiB is 48 frequencies of a 7 x 7 grid's 147 columns, vectorised enough (the 30 s
+#: scene's box: 0.07 s) and small beside a long run's box
+COHERENCE_BYTES = 8 * 2**20
 
 
 def coherence_chunk(nt: int, n_points: int) -> int:
-    """PyConTurb's ``nf_chunk`` for a box of ``nt`` time steps and ``n_points`` columns: as
-    many frequencies per chunk (their coherence in one vectorised call) as fit in
-    :data:`COHERENCE_BYTES`; every frequency in one chunk when they all fit (6x faster than
-    one at a time on the 30 s scene). Chunk sizes between 1 and the frequency count rely on
-    :func:`aligned_chunks` (PyConTurb 2.7 mislabels the frequencies at multiples of the
-    chunk); without it (another PyConTurb version) only 1 or all are used."""
+    """Frequencies per chunk of :func:`kaimal_box` for a box of ``nt`` time steps and
+    ``n_points`` columns: as many as fit in :data:`COHERENCE_BYTES` (at least one). The box
+    does not depend on it (each frequency's coherence and Cholesky factor are its own)."""
     n_f = nt // 2 + 1
-    fit = max(COHERENCE_BYTES // (n_points**2 * 8), 1)
-    if fit >= n_f:
-        return n_f
-    return fit if _aligned_fix_applies() else 1
+    return int(min(max(COHERENCE_BYTES // (n_points**2 * 8), 1), n_f))
 
 
-@functools.cache
-def _aligned_fix_applies() -> bool:
-    """Whether the installed PyConTurb has the 2.7 chunk loop :func:`aligned_chunks` fixes."""
-    try:
-        from importlib.metadata import version
+def kaimal_box(y: np.ndarray, z: np.ndarray, nt: int, dt: float, seed: int, u_ref: float,
+               sig_vals: list) -> np.ndarray:
+    """A Kaimal turbulence box with IEC 61400-1 coherence by the Veers method, as PyConTurb's
+    ``gen_turb`` makes it (constant mean ``u_ref`` and standard deviations ``sig_vals`` of u,
+    v, w; points ``y`` outer, ``z`` inner): ``(nt, 3, ny, ny)`` m/s, the mean included.
 
-        return version("pyconturb").startswith("2.7.")
-    except Exception:  # pragma: no cover - not installed
-        return False
+    The same operations on the same numbers in the same order as PyConTurb 2.7 (its random
+    stream drawn row by row; tests/test_turbine.py compares the boxes to the bit), in memory
+    that does not hold the box five times over and without PyConTurb's import (28 MB of
+    SciPy and h5py): ``gen_turb`` keeps the magnitudes, the random phases, the spectrum, the
+    time series and a DataFrame of them (a 3 600 s box on 7 x 7 points peaked 420 MB above
+    the box's 42 MB). Here the phases are drawn and the coherence is formed a chunk of
+    frequencies at a time (:func:`coherence_chunk`), and each column's inverse FFT goes
+    straight into the box.
 
+    Kaimal spectrum (IEC 61400-1 ed. 3, C.2): ``S_k(f) = 4 tau_k / (1 + 6 tau_k f)^(5/3)``,
+    ``tau_k = L_k / U``, ``L_k = (8.1, 2.7, 0.66) Lambda_1``, ``Lambda_1 = 0.7 z`` below 60 m
+    else 42 m; magnitudes ``sqrt(S df / 2)`` scaled to ``sig_vals`` exactly; u coherence
+    ``exp(-12 sqrt((f / U)^2 + (0.12 / L_c)^2) r)``, ``L_c = 340.2`` m (IEC ed. 4 as
+    PyConTurb); v and w uncorrelated between points."""
+    import itertools
 
-@contextlib.contextmanager
-def aligned_chunks():
-    """Within the block, PyConTurb 2.7's ``gen_turb`` gets every frequency's own coherence
-    with any ``nf_chunk``. Its loop (``pyconturb/simulation.py``) makes a chunk at frequency
-    index ``i = (k - 1) c + 1`` from the indices ``get_chunk_idcs`` gives for chunk
-    ``i // c = k - 1`` (``[(k - 1) c, k c)``) and reads entry ``i % c`` for ``i`` up to
-    ``k c``: entry 0, read at ``i = k c``, holds frequency ``(k - 1) c``. The indices given
-    here put ``k c`` in entry 0 (the others unchanged), so every read is right; checked against
-    the frequency-by-frequency box in tests/test_turbine.py. Does nothing for another
-    PyConTurb version."""
-    if not _aligned_fix_applies():
-        yield
-        return
-    import pyconturb.simulation as sim
+    from scipy.linalg import cholesky
 
-    saved = sim.get_chunk_idcs
-
-    def get_chunk_idcs(freq, i_chunk, nf_chunk):
-        if nf_chunk <= 1:
-            return saved(freq, i_chunk, nf_chunk)
-        idx = np.arange(i_chunk * nf_chunk, (i_chunk + 1) * nf_chunk)
-        idx[0] = (i_chunk + 1) * nf_chunk
-        return np.minimum(idx, len(freq) - 1)  # beyond the last: never read
-
-    sim.get_chunk_idcs = get_chunk_idcs
-    try:
-        yield
-    finally:
-        sim.get_chunk_idcs = saved
+    ny = len(y)
+    ys, zs = np.meshgrid(y, z)
+    n_p = ys.size
+    k = np.tile(np.array([0, 1, 2]), n_p).astype(float)  # columns u_p0, v_p0, w_p0, u_p1...
+    yy = np.repeat(ys.T.ravel(), 3).astype(float)
+    zz = np.repeat(zs.T.ravel(), 3).astype(float)
+    n_s = k.size
+    T = nt * dt
+    n_f = nt // 2 + 1
+    freq = np.arange(n_f) / T
+    # magnitudes (PyConTurb: kaimal_spectrum, spc_to_mag, constant_sig)
+    f = np.reshape(freq, (-1, 1))
+    lambda_1 = 0.7 * zz * (zz < 60) + 42 * (zz >= 60)
+    l_k = lambda_1 * (8.1 * np.isclose(k, 0) + 2.7 * np.isclose(k, 1) + 0.66 * np.isclose(k, 2))
+    tau = np.reshape((l_k / u_ref), (1, -1))
+    mags = np.sqrt(((4 * tau) / np.power(1. + 6 * tau * f, 5. / 3.)) * freq[1] / 2)
+    mags[0, :] = 0.
+    sig_k = np.empty(n_s)
+    for ki in (0, 1, 2):
+        sig_k[k.astype(int) == ki] = sig_vals[ki]
+    if nt == 2:
+        std_now = np.sqrt(nt / (nt - 1) * np.sum(np.abs(mags)**2, axis=0))
+    else:
+        std_now = np.sqrt(nt / (nt - 1) * (2 * np.sum(np.abs(mags)**2, axis=0)
+                                           - ((nt + 1) % 2) * np.abs(mags[-1, :])**2))
+    mags = ((sig_k / std_now) * mags).astype(float)
+    # the u components' point pairs and distances (PyConTurb: get_iec_cor_mat)
+    i_u = np.arange(n_s)[k == 0]
+    pairs = list(itertools.combinations(i_u, 2))
+    ii = np.array([p[0] for p in pairs], dtype=np.int64)
+    jj = np.array([p[1] for p in pairs], dtype=np.int64)
+    r = np.sqrt((yy[ii] - yy[jj])**2 + (zz[ii] - zz[jj])**2)
+    spectrum = np.zeros((n_f, n_s), dtype=np.complex128)
+    rng = np.random.RandomState(seed)  # gen_turb: np.random.seed(seed); rand(n_f, n_s)
+    chunk = coherence_chunk(nt, n_s)
+    empty = np.array([])
+    for a in range(0, n_f, chunk):
+        b = min(a + chunk, n_f)
+        phases = np.exp(1j * 2 * np.pi * rng.rand(b - a, n_s))
+        if b == n_f and not (nt % 2):  # even nt: the last phase 0 or pi (a real signal)
+            phases[-1, :] = np.exp(1j * np.round(np.real(phases[-1, :])) * np.pi)
+        lo = max(a, 1)  # the mean (frequency 0) stays zero
+        if lo >= b:
+            continue
+        fc = np.array(freq[lo:b]).reshape(-1, 1)
+        coh = np.repeat(np.eye(n_s, dtype=np.float64)[None, :, :], b - lo, axis=0)
+        exp_constant = np.sqrt((1 / u_ref * fc)**2 + (0.12 / 340.2)**2).astype(np.float64)
+        for c0 in range(0, len(ii), 10_000):  # PyConTurb's pairs per chunk
+            sl = slice(c0, c0 + 10_000)
+            vals = np.exp(-12 * np.abs(r[sl]) * exp_constant)
+            coh[:, ii[sl], jj[sl]] = vals
+            coh[:, jj[sl], ii[sl]] = np.conj(vals)
+        for i in range(lo, b):
+            L = cholesky(coh[i - lo], check_finite=False, lower=True) * mags[i]
+            spectrum[i, :] = L @ np.concatenate((empty, phases[i - a, :]))
+        del coh
+    wsp = np.ones_like(yy) * u_ref * (k == 0)
+    box = np.empty((nt, 3, ny, ny))
+    for j in range(n_s):  # columns u_p0, v_p0, w_p0, u_p1, ...: y outer, z inner
+        p, c = divmod(j, 3)
+        box[:, c, p // ny, p % ny] = np.fft.irfft(spectrum[:, j], n=nt) * nt + wsp[j]
+    return box
 
 
 #: turbulence boxes kept per process (by the wind's parameters; a 600 s box of 7 x 7 points
@@ -171,13 +211,24 @@ class Wind:
         return {**self.__dict__, "_box": None}
 
     # -- turbulence box ------------------------------------------------------------------
+    def release(self) -> None:
+        """Drop this wind's turbulence box from memory (it and the process's cache of boxes
+        hold it; a 3 600 s box of 7 x 7 points is 42 MB): after a long run, before its
+        figures. A later sample generates it again, the same to the bit."""
+        key = self._key()
+        self._box = None
+        _BOXES.pop(key, None)
+
+    def _key(self) -> tuple:
+        return tuple((k, v) for k, v in sorted(vars(self).items())
+                     if k not in ("_box", "shear_exponent", "tower_radius", "tower_distance"))
+
     def _turbulence(self):
         """(times, y, z, box[time, comp, iy, iz]) of the turbulent fluctuations (read-only;
         the process keeps the last :data:`BOX_CACHE` boxes by their parameters, so that the
         cases of a study on one seed generate it once per worker)."""
         if self._box is None:
-            key = tuple((k, v) for k, v in sorted(vars(self).items())
-                        if k not in ("_box", "shear_exponent", "tower_radius", "tower_distance"))
+            key = self._key()
             box = _BOXES.get(key)
             if box is None:
                 box = self._generate()
@@ -210,23 +261,9 @@ class Wind:
         elif self.model == "mann":
             box = self._mann_box(nt, ny, float(y[1] - y[0]))
         else:
-            try:
-                from pyconturb import gen_spat_grid, gen_turb
-                from pyconturb.sig_models import constant_sig
-                from pyconturb.wind_profiles import constant_profile
-            except ImportError as err:  # pragma: no cover - environment
-                raise ModelError("wind.turbulence_intensity", "turbulence needs PyConTurb: "
-                                 "pip install 'gearmodal[wind]'") from err
-            spat = gen_spat_grid(y, z)
             sig = self.turbulence_intensity * self.mean_speed
-            with aligned_chunks():
-                df = gen_turb(spat, T=nt * self.dt, nt=nt, seed=int(self.seed),
-                              u_ref=self.mean_speed, z_ref=self.hub_height,
-                              wsp_func=constant_profile, sig_func=constant_sig,
-                              sig_vals=[sig, 0.8 * sig, 0.5 * sig], comps=[0, 1, 2],
-                              nf_chunk=coherence_chunk(nt, spat.shape[1]))
-            vals = df.to_numpy()[:nt]  # columns u_p0, v_p0, w_p0, u_p1, ...: y outer, z inner
-            box = vals.reshape(nt, ny, ny, 3).transpose(0, 3, 1, 2).copy()
+            box = kaimal_box(y, z, nt, self.dt, int(self.seed), self.mean_speed,
+                             [sig, 0.8 * sig, 0.5 * sig])
             box -= box.mean(axis=0, keepdims=True)  # the mean comes from the profile
         return t, y, z, box
 
