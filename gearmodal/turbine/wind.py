@@ -125,6 +125,7 @@ def kaimal_box(y: np.ndarray, z: np.ndarray, nt: int, dt: float, seed: int, u_re
             L = cholesky(coh[i - lo], check_finite=False, lower=True) * mags[i]
             spectrum[i, :] = L @ np.concatenate((empty, phases[i - a, :]))
         del coh
+    del mags  # the spectrum is formed: the box takes its place
     wsp = np.ones_like(yy) * u_ref * (k == 0)
     box = np.empty((nt, 3, ny, ny))
     for j in range(n_s):  # columns u_p0, v_p0, w_p0, u_p1, ...: y outer, z inner
