@@ -104,6 +104,109 @@ def _count(x):
     return rng[:m], mean[:m], count[:m]
 
 
+@numba.njit(cache=True)
+def _count_into(x, stack, hi, lo_out, ms, sums):
+    """:func:`_count`'s loop for a stream: the turning points ``x`` onto the residue
+    ``stack[:hi]`` (values), each cycle's ``count * range^m`` added to ``sums`` for every
+    exponent in ``ms`` (full cycles only: the residue's half cycles are added at the end).
+    Returns the new height. A residue of the three-point count never needs more than the
+    points not yet closed, which stay few (``stack`` grows by the caller when full)."""
+    for i in range(x.shape[0]):
+        stack[hi] = x[i]
+        hi += 1
+        while hi - lo_out[0] >= 3:
+            x1, x2, x3 = stack[hi - 3], stack[hi - 2], stack[hi - 1]
+            X = abs(x3 - x2)
+            Y = abs(x2 - x1)
+            if X < Y:
+                break
+            c = 1.0
+            if hi - lo_out[0] == 3:  # Y holds the starting point: a half cycle
+                c = 0.5
+                lo_out[0] += 1
+            else:  # a full cycle: the peak and valley of Y dropped
+                stack[hi - 3] = stack[hi - 1]
+                hi -= 2
+            for j in range(ms.shape[0]):
+                sums[j] += c * Y ** ms[j]
+    return hi
+
+
+class RainflowStream:
+    """Rainflow counting (ASTM E1049-85 5.4.4, as :func:`rainflow_cycles`) of a load that
+    comes in chunks, in constant memory: the turning points are found across the chunks'
+    joins, only the residue (the points not yet closed) is kept, and each cycle adds
+    ``count * range^m`` to a sum per Woehler exponent. :meth:`damage_equivalent_load` is
+    then (F1) of the whole load, as :func:`damage_equivalent_load` gives it (the same cycles
+    in the same order; the sums added in order instead of pairwise: rounding)."""
+
+    def __init__(self, exponents):
+        self.ms = np.array([float(m) for m in exponents])
+        for m in self.ms:
+            if not 1.0 <= m <= 50.0:
+                raise ModelError("m", f"= {m!r}: a Woehler exponent from 1 to 50")
+        self.sums = np.zeros(len(self.ms))
+        self.stack = np.empty(64)
+        self.hi = 0
+        self.lo = np.zeros(1, dtype=np.int64)
+        self.prev = None  # the last point, not yet known to be a turning point
+        self.dir = 0.0
+        self.n = 0
+        self.closed = False
+
+    def feed(self, load) -> None:
+        """The next chunk of the load (finite values, in time order)."""
+        x = np.asarray(load, dtype=float).ravel()
+        if x.size == 0:
+            return
+        if not np.all(np.isfinite(x)):
+            raise ModelError("load", "needs finite values")
+        self.n += x.size
+        if self.prev is not None:
+            x = np.concatenate([[self.prev], x])
+        x = x[np.concatenate([[True], np.diff(x) != 0])]  # a plateau counts once
+        if x.size < 2:
+            self.prev = float(x[0])
+            return
+        d = np.sign(np.diff(x))
+        # the load's start (no direction yet) and a change of direction are turning points
+        first = self.dir == 0.0 or d[0] != self.dir
+        turn = np.concatenate([[first], d[1:] * d[:-1] < 0])
+        self._push(x[:-1][turn])
+        self.prev, self.dir = float(x[-1]), float(d[-1])
+
+    def _push(self, pts: np.ndarray) -> None:
+        need = self.hi + pts.size
+        if need > self.stack.size:
+            # the closed bottom entries are dropped, the stack grown if still short
+            keep = self.stack[self.lo[0]:self.hi].copy()
+            self.hi -= int(self.lo[0])
+            self.lo[0] = 0
+            size = max(self.stack.size, 2 * (self.hi + pts.size))
+            self.stack = np.empty(size)
+            self.stack[:self.hi] = keep
+        self.hi = _count_into(pts, self.stack, self.hi, self.lo, self.ms, self.sums)
+
+    def close(self) -> None:
+        """The load's end: its last point, and the residue counted as half cycles."""
+        if self.closed:
+            return
+        if self.n < 2:
+            raise ModelError("load", "needs at least two finite values")
+        self._push(np.array([self.prev]))
+        r = self.stack[self.lo[0]:self.hi]
+        for j, m in enumerate(self.ms):
+            self.sums[j] += float(np.sum(0.5 * np.abs(np.diff(r)) ** m))
+        self.closed = True
+
+    def damage_equivalent_load(self, m: float, n_ref: float = N_REF) -> float:
+        """(F1) for exponent ``m`` (one of those given) at ``n_ref`` cycles (closes the
+        stream)."""
+        self.close()
+        j = int(np.flatnonzero(self.ms == float(m))[0])
+        return float((self.sums[j] / n_ref) ** (1.0 / float(m)))
+
+
 def damage_equivalent_load(load, m: float, n_ref: float = N_REF) -> float:
     """The damage-equivalent load range (F1) of ``load`` for Woehler exponent ``m`` at
     ``n_ref`` cycles (same unit as the load)."""
@@ -231,34 +334,53 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
         if not (isinstance(m, (int, float)) and 1.0 <= m <= 50.0):
             raise ModelError(f"woehler.{key}", f"= {m!r}: a Woehler exponent from 1 to 50")
     sim, tur = result.gearbox, result.turbine.loads
-    if not (isinstance(t_skip, (int, float)) and 0 <= t_skip < float(sim.forces.index[-1])):
+    if not (isinstance(t_skip, (int, float)) and 0 <= t_skip < sim.time_span()[1]):
         raise ModelError("t_skip", f"= {t_skip!r}: must be >= 0 and shorter than the run")
-    f = sim.forces[sim.forces.index >= t_skip]
+    columns = sim.force_columns()
     stage = sim.meshes()
     flanks = [f"{m}.{side}" for m in stage if m.startswith(stage[0].split(".")[0] + ".")
-              for side in ("front", "back") if f"{m}.{side}" in f.columns]
+              for side in ("front", "back") if f"{m}.{side}" in columns]
     bearings = [b for b in sim.elements_of("planet_bearing")
-                if f"{b}.x" in f.columns and f"{b}.y" in f.columns]
+                if f"{b}.x" in columns and f"{b}.y" in columns]
     if not flanks or not bearings:
         raise ModelError("result", "needs a planetary stage's flank and planet-bearing forces")
-    speed = tur["rotor_speed_rpm"].reindex(f.index, method="nearest").to_numpy()
-    torque = tur["torque_Nm"].reindex(f.index, method="nearest")
-    teeth = f[flanks].max(axis=1)
-    radial = {b: np.hypot(f[f"{b}.x"], f[f"{b}.y"]) for b in bearings}
-    worst = max(radial, key=lambda b: float(np.mean(radial[b] ** ex["bearing"])))
     if not (isinstance(planet_spin, (int, float)) and planet_spin > 0
             and math.isfinite(planet_spin)):
         raise ModelError("planet_spin", f"= {planet_spin!r}: planet revolutions on the pin "
                          "per rotor revolution, > 0")
+    # the run's forces a chunk of rows at a time (a stored run's row groups): the flank forces
+    # counted as they come (RainflowStream), the few signals the rest needs kept per row
+    streams = {c: RainflowStream((ex["tooth_root"], ex["tooth_flank"])) for c in flanks}
+    keep: dict[str, list] = {k: [] for k in ("t", "speed", "torque", "teeth", *bearings)}
+    for f in sim.force_chunks([*flanks, *(f"{b}.{d}" for b in bearings for d in "xy")]):
+        f = f[f.index >= t_skip]
+        if f.empty:
+            continue
+        keep["t"].append(np.asarray(f.index, dtype=float))
+        keep["speed"].append(tur["rotor_speed_rpm"].reindex(f.index, method="nearest")
+                             .to_numpy())
+        keep["torque"].append(tur["torque_Nm"].reindex(f.index, method="nearest").to_numpy())
+        keep["teeth"].append(f[flanks].max(axis=1).to_numpy())
+        for b in bearings:
+            keep[b].append(np.hypot(f[f"{b}.x"], f[f"{b}.y"]).to_numpy())
+        for c in flanks:
+            streams[c].feed(f[c].to_numpy())
+    t = np.concatenate(keep["t"])
+    index = pd.Index(t, name="time")
+    speed = np.concatenate(keep["speed"])
+    torque = pd.Series(np.concatenate(keep["torque"]), index=index)
+    teeth = np.concatenate(keep["teeth"])
+    radial = {b: pd.Series(np.concatenate(keep[b]), index=index) for b in bearings}
+    worst = max(radial, key=lambda b: float(np.mean(radial[b] ** ex["bearing"])))
     ratio = float(planet_spin)
     life = {b: rating_life(radial[b], ratio * speed, bearing_C, ex["bearing"]) for b in bearings}
     short = min(life, key=lambda b: life[b]["l10_h"])
-    t = np.asarray(f.index, dtype=float)
     revs = float(np.sum(_weights(t) * ratio * np.abs(speed) / 60.0))
-    cycles = [rainflow_cycles(f[c]) for c in flanks]  # counted once, read at both exponents
     row = {"duration_s": float(t[-1] - t[0]),
-           "del_tooth_N": max(_del(c, ex["tooth_root"], n_ref) for c in cycles),
-           "del_tooth_flank_N": max(_del(c, ex["tooth_flank"], n_ref) for c in cycles),
+           "del_tooth_N": max(st.damage_equivalent_load(ex["tooth_root"], n_ref)
+                              for st in streams.values()),
+           "del_tooth_flank_N": max(st.damage_equivalent_load(ex["tooth_flank"], n_ref)
+                                    for st in streams.values()),
            "del_planet_bearing_N": max(damage_equivalent_load(r, ex["bearing"], n_ref)
                                        for r in radial.values()),
            "l10_planet_bearing_h": life[short]["l10_h"],
@@ -270,12 +392,12 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
            "p99_planet_bearing_force_N": float(np.percentile(radial[worst], 99.0)),
            "mean_power_W": float(tur["power_W"][tur.index >= t_skip].mean())}
     if tables:
-        rotor_rpm = pd.Series(speed, index=f.index)
+        rotor_rpm = pd.Series(speed, index=index)
         parts = []
         for name, series in (("rotor_torque_Nm", torque), ("tooth_force_N", teeth),
                              ("planet_bearing_force_N", radial[worst])):
             edges = LEVELS[name]
-            x = pd.Series(np.clip(series.to_numpy(), edges[0], edges[-1]), index=f.index)
+            x = pd.Series(np.clip(np.asarray(series), edges[0], edges[-1]), index=index)
             ldd = load_duration(x, edges)
             lrd = load_revolutions(x, rotor_rpm, edges)
             parts.append(ldd.assign(quantity=name, revolutions=lrd["revolutions"]))

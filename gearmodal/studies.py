@@ -25,6 +25,7 @@ import json
 import math
 import os
 import shutil
+import tempfile
 import time
 import uuid
 from collections.abc import Callable, Iterable
@@ -141,18 +142,31 @@ def _run_case(scene, case: dict, metrics: Callable, blas_threads: int | None,
     except ImportError:  # pragma: no cover - threadpoolctl is a dependency
         limit = nullcontext()
     t0 = time.process_time()
-    with limit:
-        if callable(scene):
-            result = scene(**case)
-        else:
-            from .scene import load_scene
+    scratch = None
+    try:
+        with limit:
+            if callable(scene):
+                result = scene(**case)
+            else:
+                from .scene import load_scene
 
-            result = load_scene(scene, overrides=case).simulate()
-        row = dict(metrics(result))
-    tables = row.pop("tables", {}) or {}
-    cpu = time.process_time() - t0
-    if save_to is not None:
-        result.save(save_to)
+                sc = load_scene(scene, overrides=case)
+                out = None
+                if sc.turbine is not None and sc.method != "auto":
+                    # a turbine case streams its rows to disk as it runs (a 600 s case held
+                    # in memory took 3 GB of a worker) and its metrics read them back a
+                    # chunk at a time: into the kept result's folder, or a scratch one
+                    out = save_to or tempfile.mkdtemp(prefix="gearmodal-case-")
+                    scratch = None if save_to else out
+                result = sc.simulate(out=out)
+            row = dict(metrics(result))
+        tables = row.pop("tables", {}) or {}
+        cpu = time.process_time() - t0
+        if save_to is not None:
+            result.save(save_to)
+    finally:
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
     return row, tables, cpu
 
 

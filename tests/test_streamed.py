@@ -187,3 +187,27 @@ def test_the_cli_streams_a_turbine_run_and_writes_csv_when_asked(tmp_path):
     b = DrivetrainResult.load(tmp_path / "csv")
     close(a.gearbox.forces, b.gearbox.forces)
     pd.testing.assert_frame_equal(a.turbine.loads, b.turbine.loads, check_exact=True)
+
+
+def test_the_fatigue_row_of_a_stored_run_is_the_held_runs(clearance_runs):
+    """drivetrain_fatigue reads a stored run a row group at a time (the flank forces counted
+    as they stream): the same row as from the run held in memory, and its tooth DEL is the
+    whole series' count."""
+    from gearmodal.fatigue import damage_equivalent_load, drivetrain_fatigue
+
+    held, _, out = clearance_runs
+    streamed = DrivetrainResult.load(out)
+    a = drivetrain_fatigue(held, bearing_C=2e6, planet_spin=2.5, t_skip=0.2)
+    b = drivetrain_fatigue(streamed, bearing_C=2e6, planet_spin=2.5, t_skip=0.2)
+    assert streamed.gearbox.__dict__.get("_forces") is None  # never read whole
+    for key, val in a.items():
+        if key != "tables":
+            assert b[key] == pytest.approx(val, rel=1e-12, abs=1e-9), key
+    close(a["tables"]["spectra"].drop(columns="quantity"),
+          b["tables"]["spectra"].drop(columns="quantity"))
+    f = held.gearbox.forces
+    f = f[f.index >= 0.2]
+    flanks = [c for c in f.columns if c.startswith("stage1.") and c.endswith((".front",
+                                                                              ".back"))]
+    whole = max(damage_equivalent_load(f[c], 8.7) for c in flanks)
+    assert a["del_tooth_N"] == pytest.approx(whole, rel=1e-12)

@@ -187,6 +187,10 @@ class SimulationResult:
                 f"{self.stats.get('n_events', '?')} events, "
                 f"method={self.settings.get('method', '?')!r}{where})")
 
+    def time_span(self) -> tuple[float, float]:
+        """The first and last output time (s), without reading a stored run's rows."""
+        return self._span()
+
     def _span(self) -> tuple[float, float]:
         """The first and last output time (s), without reading a stored run's rows."""
         if self.span is not None:
