@@ -10,6 +10,7 @@ traceback and the exit status is 2.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -135,6 +136,10 @@ def cmd_simulate(args) -> int:
         scene.t_end = args.t_end
         if scene.wind is not None and scene.wind.duration < args.t_end:
             scene.wind.duration = args.t_end + 1.0
+    if args.output_dt is not None:
+        if not (math.isfinite(args.output_dt) and args.output_dt > 0):
+            raise ModelError("--output-dt", f"= {args.output_dt!r}: must be > 0 s")
+        scene.dt = args.output_dt
     run = None
     from tqdm import tqdm
 
@@ -336,6 +341,11 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("scene", help="scene file (TOML), see gearmodal/scene.py")
     sm.add_argument("--out", required=True, type=_out_folder, help="output folder")
     sm.add_argument("--t-end", type=float, dest="t_end", help="override the end time, s")
+    sm.add_argument("--output-dt", type=float, dest="output_dt",
+                    help="override the output step (the scene's dt), s: with the exact method "
+                         "it only places the rows (the events, the exact peaks and the "
+                         "solution do not depend on it), so a coarser one writes less; "
+                         "newmark integrates at it; a turbine scene's must divide aero_dt")
     sm.add_argument("--quiet", action="store_true", help="no progress bar")
     sm.add_argument("--format", choices=("parquet", "csv"), default="parquet",
                     help="the result tables' format (default parquet: written while the run "

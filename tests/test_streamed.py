@@ -211,3 +211,24 @@ def test_the_fatigue_row_of_a_stored_run_is_the_held_runs(clearance_runs):
                                                                               ".back"))]
     whole = max(damage_equivalent_load(f[c], 8.7) for c in flanks)
     assert a["del_tooth_N"] == pytest.approx(whole, rel=1e-12)
+
+
+def test_a_coarser_output_step_is_a_plain_option(tmp_path, capsys):
+    """``--output-dt`` only places the rows: the event log and the exact peaks are the same
+    to the bit at twice the scene's step, the rows shared are the same, the table smaller."""
+    from gearmodal.cli import main
+
+    runs = {}
+    for name, extra in (("base", []), ("coarse", ["--output-dt", "2e-4"])):
+        assert main(["simulate", STAGE, "--out", str(tmp_path / name), "--t-end", "0.02",
+                     *extra]) == 0
+        runs[name] = gm.SimulationResult.load(tmp_path / name)
+    a, b = runs["base"], runs["coarse"]
+    assert len(b.t) == (len(a.t) - 1) // 2 + 1
+    pd.testing.assert_frame_equal(a.events, b.events, check_exact=True)
+    pd.testing.assert_frame_equal(a.peak_bins, b.peak_bins, check_exact=True)
+    pd.testing.assert_frame_equal(a.forces.iloc[::2], b.forces, check_exact=True)
+    assert (tmp_path / "coarse" / "forces.parquet").stat().st_size \
+        < (tmp_path / "base" / "forces.parquet").stat().st_size
+    assert main(["simulate", STAGE, "--out", str(tmp_path / "x"), "--output-dt", "0"]) == 2
+    assert "--output-dt = 0.0: must be > 0 s" in capsys.readouterr().err
