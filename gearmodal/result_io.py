@@ -6,7 +6,7 @@ Each result's ``save(dir)`` writes ``dir/result.json`` with ``{"format": <kind>,
 besides its tables; ``load(dir)`` refuses a directory without it, of another kind, or of another
 version (an older gearmodal wrote it), naming the directory. Parquet keeps float64 as it is;
 floats in CSV are written in their shortest exact form by pandas and read back with the
-round-trip parser, so a result loads to the same numbers either way.
+round-trip parser (pandas 3's default), so a result loads to the same numbers either way.
 
 A long run streams its output rows (:class:`TableWriter`: a row group every
 :data:`GROUP_ROWS` rows, so a run's memory does not grow with its duration); figures of a stored
@@ -29,6 +29,8 @@ __all__ = ["FORMATS", "VIEW_ROWS", "TableWriter", "decimated", "read_csv", "read
            "read_table", "table_chunks", "table_path", "write_header", "write_table"]
 
 HEADER = "result.json"
+#: pandas 3 reads floats exactly by default and deprecates ``float_precision``
+_PANDAS_3 = int(pd.__version__.split(".")[0]) >= 3
 #: the formats results save their tables in
 FORMATS = ("parquet", "csv")
 #: rows per Parquet row group of a streamed table (a group of a 36-column table: 1.4 MB)
@@ -86,6 +88,8 @@ def read_csv(path: Path, **kw) -> pd.DataFrame:
     p = Path(path)
     if not p.is_file():
         raise ModelError("directory", f"= {str(p.parent)!r}: {p.name} is missing")
+    if _PANDAS_3:  # its default parser is exact (float_precision is deprecated)
+        return pd.read_csv(p, **kw)
     return pd.read_csv(p, float_precision="round_trip", **kw)
 
 
