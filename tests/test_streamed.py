@@ -57,8 +57,8 @@ def test_a_streamed_turbine_run_is_the_run_held_in_memory(clearance_runs):
     held, streamed, out = clearance_runs
     a, b = held.gearbox, streamed.gearbox
     assert b.stored == out and (out / "forces.parquet").is_dir()  # in parts
-    # 1 001 rows in groups of at least 64 (whole aerodynamic steps of 20), two per part
-    assert len(list((out / "forces.parquet").glob("part-*.parquet"))) >= 6
+    # 1 001 rows in groups of at least 64 (a stretch's rows between re-basings), two per part
+    assert len(list((out / "forces.parquet").glob("part-*.parquet"))) >= 3
     assert a.stats["n_events"] > 100 and a.stats["n_rebases"] >= 5
     for name in ("q", "v", "forces"):
         close(getattr(a, name), getattr(b, name))
