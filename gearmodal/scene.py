@@ -9,6 +9,7 @@ Example (``studies/scenes/gear_rattle.toml``)::
     method = "exact"                     # exact | newmark | scipy | auto
     speed_rpm = 0.0                      # input speed at which speed terms are frozen
     tolerance = 0.05                     # method = "auto" only: relative, on the quantities
+    start = "rest"                       # rest | equilibrium (under the loads at t = 0)
 
     [loads]                              # N or N m, by load name
     "pinion.torque" = { mean = 2.0, amplitude = 6.0, frequency_hz = 80.0 }
@@ -56,6 +57,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from .errors import ModelError
 from .integrate.loads import Harmonic
 from .model import validate as v
@@ -77,7 +80,11 @@ SCENE = Table("scene", (
     Field("tolerance", "number", low=0.0, high=10.0, low_open=True, high_open=True,
           note="a relative tolerance in (0, 10), e.g. 0.05",
           doc="method = \"auto\" only: relative tolerance on the study quantities "
-              "(default 0.05)")),
+              "(default 0.05)"),
+    Field("start", "choice", choices=("rest", "equilibrium"),
+          doc="initial state: \"rest\" (default: [q0], [v0], else zero) or "
+              "\"equilibrium\" (the static equilibrium under the loads' values at t = 0, "
+              "at speed_rpm; [v0] may add velocities, [q0] is refused)")),
     "The run: model, length, step, method.")
 WAVE = Table("loads.<name> as a table", (
     Field("mean", "number", _LOAD_UNIT, default=0.0, doc="mean"),
@@ -141,6 +148,8 @@ class Scene:
     wind: object = None
     drivetrain: dict = field(default_factory=dict)
     tolerance: float = 0.05
+    #: ``"rest"`` or ``"equilibrium"`` (:meth:`initial_q`)
+    start: str = "rest"
     #: the ``[load_file]`` table as read (its path absolute), and the turbine file
     load_file: dict = field(default_factory=dict)
     turbine_file: str = ""
@@ -184,6 +193,8 @@ class Scene:
             sc["speed_rpm"] = self.speed_rpm
         if self.method == "auto":
             sc["tolerance"] = self.tolerance
+        if self.start != "rest":
+            sc["start"] = self.start
         doc: dict = {"scene": sc}
         from_file = set(self.load_file.get("mapping", {}))
         loads = {}
@@ -246,9 +257,34 @@ class Scene:
                                        out=out, **self.drivetrain, **self.options)
         from .integrate import simulate
 
-        return simulate(self.model, self.t_end, dt=self.dt, loads=self.loads, q0=self.q0,
-                        v0=self.v0, method=self.method, speed_rpm=self.speed_rpm,
-                        out=out, **self.options)
+        return simulate(self.model, self.t_end, dt=self.dt, loads=self.loads,
+                        q0=self.initial_q(), v0=self.v0, method=self.method,
+                        speed_rpm=self.speed_rpm, out=out, **self.options)
+
+    def initial_q(self) -> dict:
+        """The run's initial displacements by DOF name: ``[q0]`` (zero elsewhere) or, with
+        ``start = "equilibrium"``, the static equilibrium (:func:`gearmodal.equilibrium`)
+        under every load's value at t = 0 at ``speed_rpm``: a run of constant loads then
+        starts where it stays, instead of taking the loads as a step from rest and ringing
+        through its lowest modes."""
+        if self.start != "equilibrium":
+            return self.q0
+        from .static import equilibrium
+
+        at0 = {}
+        for name, val in self.loads.items():
+            if isinstance(val, (int, float)):
+                at0[name] = float(val)
+            elif hasattr(val, "index") and hasattr(val, "to_numpy"):  # a Series on its knots
+                t = np.asarray(val.index, dtype=float)
+                at0[name] = float(np.interp(0.0, t, val.to_numpy(dtype=float)))
+            else:  # a wave or any other function of time
+                at0[name] = float(val(0.0))
+        try:
+            eq = equilibrium(self.model, at0, self.speed_rpm)
+        except ModelError as e:
+            raise ModelError("scene.start", f"= \"equilibrium\": {e.message}") from None
+        return {k: float(x) for k, x in eq.q.items()}
 
 
 @dataclass(frozen=True)
@@ -365,6 +401,10 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
 
         loads[balance] = _balance(asm, means, on=balance)[balance]
     q0 = {k: v.number(f"q0.{k}", x, "m or rad") for k, x in doc.get("q0", {}).items()}
+    start = sc.get("start", "rest")
+    if start == "equilibrium" and q0:
+        raise ModelError("scene.start", "= \"equilibrium\" sets the initial displacements: "
+                         "remove [q0] (or start = \"rest\")")
     v0 = {k: v.number(f"v0.{k}", x, "m/s or rad/s") for k, x in doc.get("v0", {}).items()}
     options = dict(doc.get("options", {}))
     turbine, wind, drivetrain = None, None, {}
@@ -376,6 +416,9 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
             if doc.get(key):
                 raise ModelError(key, "a turbine scene starts from the accelerating "
                                  "equilibrium: remove [" + key + "]")
+        if "start" in sc:
+            raise ModelError("scene.start", "a turbine scene always starts from the "
+                             "drivetrain's accelerating equilibrium: remove it")
         if "speed_rpm" in sc:
             raise ModelError("scene.speed_rpm", "a turbine scene's speed is the rotor's: "
                              "set turbine.rotor_speed0_rpm instead")
@@ -387,7 +430,7 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
     return Scene(model=model, t_end=t_end, dt=dt, method=method, speed_rpm=speed, loads=loads,
                  q0=q0, v0=v0, options=options, source=str(p), turbine=turbine, wind=wind,
                  drivetrain=drivetrain, tolerance=tolerance, load_file=load_file,
-                 turbine_file=turbine_file)
+                 turbine_file=turbine_file, start=start)
 
 
 def _load_file(spec: dict, p: Path) -> dict:

@@ -40,8 +40,18 @@ __all__ = ["LOAD_DT", "METHODS", "PEAK_BIN", "Driver", "Harmonic", "Method", "Si
 
 
 def _initial(asm: Assembly, values, label: str) -> np.ndarray:
+    """The state's half ``label`` (``q0``/``v0``) from ``{DOF name: value}``: any mapping, a
+    pandas Series indexed by DOF name (``gm.equilibrium(model, loads).q``), or None."""
     out = np.zeros(asm.n)
-    for name, val in (values or {}).items():
+    if values is None:
+        return out
+    if isinstance(values, pd.Series):
+        values = values.to_dict()
+    if not hasattr(values, "items"):
+        raise ModelError(label, f"expected {{DOF name: value}} (a dict, or a Series indexed "
+                         f"by DOF name such as gm.equilibrium(...).q), got "
+                         f"{type(values).__name__}")
+    for name, val in values.items():
         if name not in asm.dof_names:
             raise ModelError(f"{label}.{name}", "no such DOF; available: "
                              + ", ".join(asm.dof_names))
@@ -49,6 +59,16 @@ def _initial(asm: Assembly, values, label: str) -> np.ndarray:
         out[asm.dof_names.index(name)] = v.plausible(
             f"{label}.{name}", x, "displacement" if label == "q0" else "velocity")
     return out
+
+
+def _settings_of(values) -> dict:
+    """Initial values as the run's settings keep them (JSON: a plain dict of floats)."""
+    if values is None:
+        return {}
+    if isinstance(values, pd.Series):
+        values = values.to_dict()
+    return {str(k): float(x) if isinstance(x, (int, float, np.floating)) else x
+            for k, x in dict(values).items()}
 
 
 def rotating_geometry(model: Model) -> bool:
@@ -208,7 +228,7 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
                 "options": options,
                 "loads": {k: (v if isinstance(v, (int, float)) else type(v).__name__)
                           for k, v in (loads or {}).items()},
-                "q0": q0 or {}, "v0": v0 or {}}
+                "q0": _settings_of(q0), "v0": _settings_of(v0)}
     if sink is not None:
         return stored_result(sink, system, s_init, stats, settings, (0.0, float(t[-1])),
                              peaks=run.peaks)

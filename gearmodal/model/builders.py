@@ -39,16 +39,21 @@ def _same_tooth_system(field: str, a: Gear, b: Gear, internal: bool = False) -> 
         raise ModelError(field, f"modules differ ({a.name}: {a.module:g} m, {b.name}: "
                                 f"{b.module:g} m); meshing gears need the same module")
     if not math.isclose(a.pressure_angle, b.pressure_angle, rel_tol=1e-12):
-        raise ModelError(field, f"pressure angles differ ({a.pressure_angle:g} rad vs "
-                                f"{b.pressure_angle:g} rad)")
+        raise ModelError(field, f"pressure angles differ ({_angle(a.pressure_angle)} vs "
+                                f"{_angle(b.pressure_angle)})")
     if not math.isclose(abs(a.helix_angle), abs(b.helix_angle), rel_tol=1e-12, abs_tol=1e-15):
-        raise ModelError(field, f"helix angles differ in size ({a.helix_angle:g} rad vs "
-                                f"{b.helix_angle:g} rad)")
+        raise ModelError(field, f"helix angles differ in size ({_angle(a.helix_angle)} vs "
+                                f"{_angle(b.helix_angle)})")
     if a.helix_angle != 0.0 and (a.helix_angle == b.helix_angle) != internal:
         need = "the same hand (an internal pair)" if internal else "opposite hands (an " \
             "external pair)"
-        raise ModelError(f"{field}.helix_angle", f"= {b.helix_angle:g} rad against "
-                         f"{a.name}'s {a.helix_angle:g} rad: helical gears mesh with {need}")
+        raise ModelError(f"{field}.helix_angle", f"= {_angle(b.helix_angle)} against "
+                         f"{a.name}'s {_angle(a.helix_angle)}: helical gears mesh with {need}")
+
+
+def _angle(rad: float) -> str:
+    """An angle for a message, in both units (the API's radians, a file's degrees)."""
+    return f"{rad:g} rad ({math.degrees(rad):.6g} deg)"
 
 
 def _alternation(field: str, spec, key: str | None = None, phase: float = 0.0) -> dict:

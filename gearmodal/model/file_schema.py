@@ -52,9 +52,10 @@ GEAR = Table("gear (sun, planet, ring, gear, pinion, wheel)", (
           doc="normal module (10 mm = 0.010)", note="modules are in metres: 10 mm = 0.010",
           limits="module"),
     Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 4, high_open=True,
-          degrees=True, default=REQUIRED, doc="normal pressure angle"),
+          degrees=True, default=REQUIRED, doc="normal pressure angle", deg_floor=10.0),
     Field("helix_angle", "angle", "rad", low=-math.pi / 4, high=math.pi / 4, high_open=True,
-          degrees=True, default=0.0, doc="helix angle, signed (positive = right hand)"),
+          degrees=True, default=0.0, doc="helix angle, signed (positive = right hand)",
+          deg_floor=1.0),
     Field("face_width", "number", "m", **_POS, doc="face width"),
     _MASS, _INERTIA, _DIAMETRAL),
     "A gear wheel; the ring is internal by definition.")

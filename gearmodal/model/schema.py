@@ -66,6 +66,9 @@ class Field:
     note : a hint added to range errors (``modules are in metres: 10 mm = 0.010``).
     limits : a kind of :data:`gearmodal.model.validate.LIMITS` (``"mass"``...): the range of
         ``|value|`` the solvers handle, checked after ``low``/``high``.
+    deg_floor : an angle given in degrees (``<key>_deg``) whose size is not zero but below
+        this many degrees is refused with a hint: a drivetrain has no such gear, and the
+        number is most likely radians typed into a degree key (``pressure_angle_deg = 0.349``).
     """
 
     key: str
@@ -82,6 +85,7 @@ class Field:
     lengths: tuple = ()
     note: str = ""
     limits: str = ""
+    deg_floor: float | None = None
 
     @property
     def required(self) -> bool:
@@ -287,6 +291,12 @@ class Table:
                     f, unit="deg", low=None, high=None).read(_join(path, key), val)]
             elif key.endswith("_deg") and f.type == "angle":
                 deg = v.number(_join(path, key), val, "deg")
+                if f.deg_floor is not None and 0.0 < abs(deg) < f.deg_floor:
+                    raise ModelError(_join(path, key), f"= {deg!r} deg: a "
+                                     f"{f.key.replace('_', ' ')} under {f.deg_floor:g} deg "
+                                     "is not a gear a drivetrain "
+                                     f"has; if {deg!r} is in radians, give "
+                                     f"{key} = {math.degrees(deg):.4g}")
                 rad = math.radians(deg)
                 try:
                     f._in_range(_join(path, key), rad)
@@ -375,11 +385,18 @@ def reference_markdown(sections: list[tuple[str, str, list[Table]]]) -> str:
                 unit = "deg" if f.degrees else f.unit
                 typ = TYPES[f.type]
                 rng = f.range_text()
+                if rng == f.unit:  # no bounds: the unit column says it
+                    rng = ""
                 if f.degrees and (f.low is not None or f.high is not None):
                     lo = "" if f.low is None else f"{math.degrees(f.low):.6g}"
                     hi = "" if f.high is None else f"{math.degrees(f.high):.6g}"
-                    rng = f"in {'(' if f.low_open else '['}{lo}, {hi}" \
+                    low_open = f.low_open
+                    if f.deg_floor is not None and f.low is not None and f.low > 0:
+                        lo, low_open = f"{f.deg_floor:g}", False
+                    rng = f"in {'(' if low_open else '['}{lo}, {hi}" \
                           f"{')' if f.high_open else ']'} deg"
+                    if f.deg_floor is not None and not (f.low is not None and f.low > 0):
+                        rng += f", 0 or at least {f.deg_floor:g} in size"
                 if f.type == "choice":
                     typ, rng = "string", rng
                 elif f.type == "vector":
@@ -387,11 +404,13 @@ def reference_markdown(sections: list[tuple[str, str, list[Table]]]) -> str:
                     typ = f"array of {n} numbers" if n else typ
                 if f.limits:
                     lo, hi, _ = v.LIMITS[f.limits]
-                    rng = f"{rng}; solvers: |x| in [{lo:g}, {hi:g}]".lstrip("; ")
+                    rng = f"{rng}; magnitude the solvers take: [{lo:g}, {hi:g}]".lstrip("; ")
                 dflt = "required" if f.required else ("—" if f.default is None
                                                       else f"`{_show(f.default)}`")
-                lines.append(f"| `{key}` | {typ} | {unit} | {rng if rng != unit else ''} | "
-                             f"{dflt} | {f.doc} |")
+                cells = [f"`{key}`", typ, unit, rng, dflt, f.doc]
+                # a pipe inside a cell would end it (Markdown tables): escaped
+                lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells)
+                             + " |")
             lines.append("")
     return "\n".join(lines).rstrip() + "\n"
 

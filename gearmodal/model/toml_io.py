@@ -307,6 +307,8 @@ def _at(path: str, renames=()):
         field = e.field
         for pattern, repl in renames:
             field = re.sub(pattern, repl, field)
+        # a builder file gives its gears' angles in degrees: the key the user wrote
+        field = re.sub(r"(^|\.)(pressure_angle|helix_angle)$", r"\1\2_deg", field)
         raise _err(_join(path, field), _message(e)) from None
 
 

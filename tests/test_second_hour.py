@@ -1,0 +1,97 @@
+"""A new user's second hour (issue 38): a GRC-like planetary stage (21/39/99 teeth, the NREL
+GRC 750 kW gearbox's first stage) written from the docs starts from its static equilibrium in
+a scene; ``q0`` takes an equilibrium's Series; radians typed into degree keys are caught with
+a hint; a builder's error names the key and unit the file used."""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gearmodal as gm
+from gearmodal.scene import load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+MODEL = (ROOT / "studies/models/planetary_clearance.toml").read_text().replace(
+    "carrier_bearing = { stiffness = { x = 1.0e8, y = 1.0e8 }, clearance = { x = 1.0e-3, "
+    "y = 1.0e-3 } }", "carrier_bearing = 1.0e8")
+
+SCENE = """
+[scene]
+model = "grc.toml"
+t_end = 0.05
+dt = 1e-4
+{start}
+
+[loads]
+"carrier.torque" = 2.0e5
+"carrier.force_y" = -2.0e4
+"sun.torque" = "balance"
+"""
+
+
+def write(tmp_path, start: str) -> Path:
+    (tmp_path / "grc.toml").write_text(MODEL)
+    p = tmp_path / f"scene_{start or 'none'}.toml"
+    p.write_text(SCENE.format(start=f'start = "{start}"' if start else ""))
+    return p
+
+
+def test_a_scene_starts_from_its_static_equilibrium(tmp_path):
+    """From rest the carrier torque is a step: the stage rings through its torsion modes (the
+    sun-planet force swings by tens of percent). From equilibrium it stays there: the mesh
+    force holds its static value to 1e-9 over the run (a free rotation, balanced, does not
+    accelerate)."""
+    assert "carrier_bearing = 1.0e8" in MODEL
+    rest = load_scene(write(tmp_path, "")).simulate()
+    eq_scene = load_scene(write(tmp_path, "equilibrium"))
+    assert eq_scene.start == "equilibrium" and eq_scene.q0 == {}
+    eq = eq_scene.simulate()
+    f_rest = rest.forces["sun_planet1.front"]
+    f_eq = eq.forces["sun_planet1.front"]
+    static = f_eq.iloc[0]
+    assert static > 1e3
+    assert np.abs(f_eq - static).max() <= 1e-9 * static
+    assert np.abs(f_rest - static).max() >= 0.1 * static  # the step rings
+    assert len(eq.events) == 0
+    # the scene writes back what it read; q0 with start = "equilibrium" is refused
+    again = load_scene(write(tmp_path, "equilibrium"))
+    assert 'start = "equilibrium"' in again.dumps("grc.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SCENE.format(start='start = "equilibrium"') + '\n[q0]\n"sun.x" = 1e-6\n')
+    with pytest.raises(gm.ModelError, match=r"scene\.start.*remove \[q0\]"):
+        load_scene(bad)
+
+
+def test_q0_takes_the_equilibrium_series():
+    sc = load_scene("studies/scenes/planetary_double_contact.toml")
+    loads = {k: getattr(x, "mean", x) for k, x in sc.loads.items()}
+    eq = gm.equilibrium(sc.model, loads)
+    a = gm.simulate(sc.model, 0.002, dt=1e-4, loads=loads, q0=eq.q)
+    b = gm.simulate(sc.model, 0.002, dt=1e-4, loads=loads, q0=dict(eq.q))
+    np.testing.assert_array_equal(a.q.to_numpy(), b.q.to_numpy())
+    with pytest.raises(gm.ModelError, match=r"q0: expected \{DOF name: value\}"):
+        gm.simulate(sc.model, 0.002, dt=1e-4, q0=[0.0, 1.0])
+
+
+@pytest.mark.parametrize("key, value, hint", [
+    ("pressure_angle_deg = 20.0", "pressure_angle_deg = 0.349", "pressure_angle_deg = 20"),
+    ("helix_angle_deg = 7.5", "helix_angle_deg = 0.131", "helix_angle_deg = 7.506")])
+def test_radians_in_a_degree_key_are_caught(tmp_path, key, value, hint):
+    p = tmp_path / "m.toml"
+    p.write_text(MODEL.replace(key, value, 1))
+    with pytest.raises(gm.ModelError, match=re.escape(f"if {value.split('= ')[1]} is in "
+                                                      f"radians, give {hint}")):
+        gm.load(p)
+
+
+def test_a_builders_error_names_the_key_the_file_used(tmp_path):
+    """The planet given the sun's helix hand: the error names ``helix_angle_deg`` (the key in
+    the file) and the angles in degrees too."""
+    p = tmp_path / "m.toml"
+    text = MODEL.replace("helix_angle_deg = -7.5", "helix_angle_deg = 7.5", 1)
+    p.write_text(text)
+    with pytest.raises(gm.ModelError, match=r"planet\.helix_angle_deg = 0\.1309 rad \(7\.5 "
+                                            r"deg\) against sun's 0\.1309 rad \(7\.5 deg\)"):
+        gm.load(p)
