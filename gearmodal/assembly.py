@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .errors import ModelError
+from .errors import ModelError, unknown
 from .frames import body_transform, centre, skew
 from .model.components import GRAVITY
 from .model.mesh_stiffness import MeshVariation
@@ -254,8 +254,8 @@ class Assembly:
             try:
                 j = self.load_names.index(key)
             except ValueError:
-                raise ModelError(f"loads.{key}", "no such load; available: "
-                                 + ", ".join(self.load_names)) from None
+                raise ModelError(f"loads.{key}", unknown("load", key, self.load_names)) \
+                    from None
             f += self.B[:, j] * float(value)
         return f
 

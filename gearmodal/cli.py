@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from . import shipped
-from .errors import ModelError
+from .errors import ModelError, unknown
 from .model.validate import plausible
 
 #: the largest input speed (rpm) and number of speeds a Campbell sweep takes from the command
@@ -64,8 +64,8 @@ def _loads(args, model) -> dict | None:
                              "(N or N m)")
         plausible(f"--load {name.strip()}", loads[name.strip()], "load")
         if name.strip() not in model.load_names:
-            raise ModelError(f"--load {name.strip()}", "no such load; available: "
-                             + ", ".join(model.load_names))
+            raise ModelError(f"--load {name.strip()}",
+                             unknown("load", name.strip(), model.load_names))
     if args.balance:
         from .static import balance
 
@@ -304,7 +304,12 @@ def cmd_docs_figures(args) -> int:
 def cmd_info(args) -> int:
     model = _load(args.model)
     print(model.summary())
+    print(f"DOFs ({len(model.dof_names)}; the names [q0] and [v0] take):")
     for n in model.dof_names:
+        print(" ", n)
+    names = model.assemble().load_names
+    print(f"loads ({len(names)}; the names [loads] takes, N or N m):")
+    for n in names:
         print(" ", n)
     return 0
 

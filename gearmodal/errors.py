@@ -23,3 +23,14 @@ class ModelError(ValueError):
 
     def __reduce__(self):  # pickle by (field, message): errors cross process pools intact
         return (type(self), (self.field, self.message))
+
+
+def unknown(kind: str, name: str, names) -> str:
+    """The message for a name that is not there: ``no such <kind>``, the closest names
+    (``did you mean ...?``, by :func:`difflib.get_close_matches`) and the names there are."""
+    import difflib
+
+    names = [str(n) for n in names]
+    close = difflib.get_close_matches(str(name), names, n=3, cutoff=0.6)
+    hint = f" (did you mean {', '.join(map(repr, close))}?)" if close else ""
+    return f"no such {kind}{hint}; available: " + ", ".join(names)

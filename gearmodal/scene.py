@@ -59,7 +59,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ModelError
+from .errors import ModelError, unknown
 from .integrate.loads import Harmonic
 from .model import validate as v
 from .model.model import Model
@@ -394,8 +394,7 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
     asm = model.assemble()
     for name in [*loads, *([balance] if balance else [])]:
         if name not in asm.load_names:
-            raise ModelError(f"loads.{name}", "no such load; available: "
-                             + ", ".join(asm.load_names))
+            raise ModelError(f"loads.{name}", unknown("load", name, asm.load_names))
     if balance:
         from .static import balance as _balance
 

@@ -21,7 +21,7 @@ import pandas as pd
 import scipy.linalg as sla
 
 from .assembly import Assembly, as_assembly, reduction
-from .errors import ModelError
+from .errors import ModelError, unknown
 
 RPM = 2.0 * np.pi / 60.0
 
@@ -99,7 +99,7 @@ def balance(model, loads: dict, on: str) -> dict:
         raise ModelError("balance", f"needs exactly one free mode, the model has "
                          f"{modes.shape[1]}")
     if on not in asm.load_names:
-        raise ModelError(f"loads.{on}", "no such load")
+        raise ModelError(f"loads.{on}", unknown("load", on, asm.load_names))
     rest = {k: v for k, v in loads.items() if k != on}
     phi = modes[:, 0]
     work = phi @ asm.load_vector(rest)
@@ -136,10 +136,18 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
         net = P.T @ f
         if np.abs(net).max() > 1e-9 * np.linalg.norm(f):
             j = int(np.argmax(np.abs(net)))
+            # a load of this model that works on the mode and is not given: the one to
+            # balance on (a torque first)
+            work = np.abs(P[:, j] @ asm.B)
+            given = set(loads or {})
+            free = [n for k, n in enumerate(asm.load_names)
+                    if work[k] > 1e-9 * max(work.max(), 1e-300) and n not in given]
+            free.sort(key=lambda n: not n.endswith(".torque"))
+            how = f"with gm.balance(model, loads, on={free[0]!r})" if free else \
+                "with gm.balance(model, loads, on=<one of the loads given>)"
             raise ModelError("loads", "not in equilibrium: they do net work on a free "
                              f"rigid-body mode ({_describe(asm, P[:, j])}); balance them, e.g. "
-                             "with gm.balance(model, loads, on='generator.torque'), or "
-                             "add a support")
+                             f"{how}, or add a support")
     q = np.zeros(asm.n)
 
     # Work in the space orthogonal to the free modes (basis Q): the minimum-norm solution, no

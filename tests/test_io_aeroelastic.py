@@ -129,6 +129,15 @@ def test_openfast_text_round_trip(tmp_path):
     for name, (unit, val) in CHANNELS.items():
         np.testing.assert_allclose(df[name].to_numpy(), val, rtol=1e-9)
         assert df.attrs["units"][name] == unit
+    # OpenFAST ends a text output with a line of its own: not a data row
+    p = tmp_path / "closed.out"
+    p.write_text((tmp_path / "run.out").read_text()
+                 + "\nThis output file was closed on 27-Nov-2026 at 09:40:00.\n")
+    pd.testing.assert_frame_equal(read_loads(p), df)
+    p.write_text((tmp_path / "run.out").read_text().replace("\n", "\nstray text\n", 8)
+                 .replace("stray text\n", "", 7))  # text between data rows: refused
+    with pytest.raises(gm.ModelError, match="non-numeric or ragged"):
+        read_loads(p)
 
 
 def test_loads_from_files_drive_the_gearbox(tmp_path):

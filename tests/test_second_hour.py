@@ -95,3 +95,27 @@ def test_a_builders_error_names_the_key_the_file_used(tmp_path):
     with pytest.raises(gm.ModelError, match=r"planet\.helix_angle_deg = 0\.1309 rad \(7\.5 "
                                             r"deg\) against sun's 0\.1309 rad \(7\.5 deg\)"):
         gm.load(p)
+
+
+def test_info_lists_the_loads_and_a_mistyped_name_gets_a_suggestion(capsys):
+    from gearmodal.cli import main
+
+    assert main(["info", "studies/models/gear_pair.toml"]) == 0
+    out = capsys.readouterr().out
+    assert "loads (3; the names [loads] takes, N or N m):" in out
+    assert "  pinion.torque" in out and "  wheel.torque" in out
+    m = gm.load("studies/models/gear_pair.toml")
+    with pytest.raises(gm.ModelError, match=r"no such load \(did you mean 'pinion\.torque'"):
+        gm.simulate(m, 1e-3, dt=1e-4, loads={"pinion.torqe": 1.0})
+    with pytest.raises(gm.ModelError, match=r"no such DOF \(did you mean 'wheel\.theta'"):
+        gm.simulate(m, 1e-3, dt=1e-4, v0={"wheel.theat": 1.0})
+
+
+def test_an_unbalanced_modal_names_a_load_the_model_has():
+    """The hint names a load of this model that works on the free rotation and was not
+    given (the gear pair's wheel torque), not the drivetrain's generator torque."""
+    m = gm.load("studies/models/gear_pair.toml")
+    with pytest.raises(gm.ModelError, match=r"gm\.balance\(model, loads, on='wheel\.torque'\)"):
+        gm.modal(m, loads={"pinion.torque": 10.0})
+    bal = gm.balance(m, {"pinion.torque": 10.0}, on="wheel.torque")
+    assert gm.modal(m, loads=bal) is not None

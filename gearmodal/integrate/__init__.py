@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ..assembly import Assembly
-from ..errors import ModelError
+from ..errors import ModelError, unknown
 from ..model import validate as v
 from ..model.model import Model
 from .azimuth import AzimuthAssembler
@@ -53,8 +53,7 @@ def _initial(asm: Assembly, values, label: str) -> np.ndarray:
                          f"{type(values).__name__}")
     for name, val in values.items():
         if name not in asm.dof_names:
-            raise ModelError(f"{label}.{name}", "no such DOF; available: "
-                             + ", ".join(asm.dof_names))
+            raise ModelError(f"{label}.{name}", unknown("DOF", name, asm.dof_names))
         x = v.number(f"{label}.{name}", val, "m or rad" if label == "q0" else "m/s or rad/s")
         out[asm.dof_names.index(name)] = v.plausible(
             f"{label}.{name}", x, "displacement" if label == "q0" else "velocity")

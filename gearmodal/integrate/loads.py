@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..errors import ModelError
+from ..errors import ModelError, unknown
 from ..model import validate as v
 
 __all__ = ["LOAD_DT", "Harmonic", "LoadPaths", "force_at", "load_paths"]
@@ -137,7 +137,7 @@ def load_paths(names: list[str], loads: dict | None, t_end: float,
     knots = [np.array([0.0, float(t_end)])]
     for name, val in (loads or {}).items():
         if name not in names:
-            raise ModelError(f"loads.{name}", "no such load; available: " + ", ".join(names))
+            raise ModelError(f"loads.{name}", unknown("load", name, names))
         j = names.index(name)
         if isinstance(val, Harmonic):
             parts = {"mean": val.mean, "amplitude": val.amplitude,

