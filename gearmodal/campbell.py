@@ -81,6 +81,49 @@ def default_orders(model: Model) -> dict[str, float]:
 #: the logarithmic decrements the colour scales span: from -1/5 of the top (unstable, red)
 #: through 0 (yellow) to the top (green)
 LOG_DEC_SCALE = (-0.1, 0.5)
+#: the interactive diagram's colours over [-top/5, top]: red below 0, yellow at 0 (1/6 of the
+#: way), green at the top (matplotlib's RdYlGn stops)
+LOG_DEC_COLOURS = [[0.0, "#a50026"], [1 / 12, "#f46d43"], [1 / 6, "#ffffbf"],
+                    [0.45, "#a6d96a"], [1.0, "#006837"]]
+
+
+def order_labels(orders: dict, names: list, x_max: float, f_max: float,
+                  avoid: tuple = ()) -> dict:
+    """Where each order line's label goes (right-aligned, above the point): lines of the same
+    order share one label (``3P = stage1 planet pass``); a label starts where its line leaves
+    the plot (its right end or the top) and moves down along its own line until it covers no
+    label placed before it (from the right, at 7-point text: about 1 % of the axis per
+    character, 4 % high) nor a box of ``avoid`` (``(x0, x1, y0, y1)``: the legend); a label
+    that would reach past the left edge is set to the right of its point. Returns
+    ``{label: (x, y, horizontal alignment)}``."""
+    same: dict[float, list[str]] = {}
+    for o in names:
+        same.setdefault(float(orders[o]), []).append(o)
+    placed: list[tuple] = list(avoid)  # (x0, x1, y0, y1)
+    out = {}
+    h = 0.04 * f_max
+    for order in sorted(same, key=lambda r: min(x_max, f_max * 60.0 / r) if r > 0 else x_max,
+                        reverse=True):
+        text = " = ".join(same[order])
+        w = 0.0105 * x_max * len(text)
+        edge = order <= 0 or order * x_max / 60.0 <= f_max  # leaves at the right edge
+        x0 = x_max if edge else f_max * 60.0 / order
+        y0 = order * x0 / 60.0 if edge else f_max
+        # candidates: where the line leaves, then down (along the line from the top, along
+        # the edge from the right), then up the right edge
+        steps = [y0 - k * h for k in range(40) if y0 - k * h >= 0.0]
+        if edge:
+            steps += [y0 + k * h for k in range(1, 40) if y0 + k * h <= f_max - h]
+        x, y, box = x0, y0, (x0 - w, x0, y0, y0 + h)
+        for y in steps:
+            x = x0 if edge else y * 60.0 / order
+            box = (x - w, x, y, y + h) if x - w >= 0.0 else (x, x + w, y, y + h)
+            if not any(box[0] < p[1] and p[0] < box[1] and box[2] < p[3] and p[2] < box[3]
+                       for p in placed):
+                break
+        placed.append(box)
+        out[text] = (x, y, "right" if box[1] == x else "left")
+    return out
 
 
 @dataclass
@@ -239,13 +282,12 @@ class CampbellResult:
             t = self.mode_types[len(s) // 2, j]
             ax.plot(s, f, color=colours[t], lw=1.3, label=t if t not in seen else None)
             seen.add(t)
-        for _i, o in enumerate(names):
+        for o in names:
             ax.plot(s, self.orders[o] * s / 60.0, ls="--", lw=0.9, color="0.35")
-            x = s.max()
-            y = self.orders[o] * x / 60.0
-            if y > fmax_hz:
-                x, y = fmax_hz * 60.0 / self.orders[o], fmax_hz
-            ax.annotate(o, (x, y), fontsize=7, color="0.25", ha="right", va="bottom")
+        legend = (0.0, 0.3 * float(s.max()), 0.75 * fmax_hz, fmax_hz)  # upper left
+        for o, (x, y, ha) in order_labels(self.orders, names, float(s.max()), fmax_hz,
+                                           (legend,)).items():
+            ax.annotate(o, (x, y), fontsize=7, color="0.25", ha=ha, va="bottom")
         cr = self.crossings(names)
         cr = cr[cr.frequency_hz <= fmax_hz]
         if len(cr):
@@ -305,6 +347,10 @@ class CampbellResult:
             fig.add_trace(go.Scatter(x=s, y=self.orders[o] * s / 60.0, mode="lines", name=o,
                                      line={"dash": "dash", "color": "#555", "width": 1},
                                      hoverinfo="name"))
+        for o, (x, y, ha) in order_labels(self.orders, names, float(s.max()),
+                                           fmax_hz).items():
+            fig.add_annotation(x=x, y=y, text=o, showarrow=False, xanchor=ha,
+                               yanchor="bottom", font={"size": 10, "color": "#444"})
         cr = self.crossings(names)
         cr = cr[cr.in_operating_range & (cr.frequency_hz <= fmax_hz)]
         if len(cr):
@@ -316,7 +362,9 @@ class CampbellResult:
             title=f"Campbell diagram {self.model_name}".strip(),
             xaxis_title="input speed [rpm]", yaxis_title="natural frequency [Hz]",
             yaxis_range=[0, fmax_hz], showlegend=False, template="plotly_white",
-            coloraxis={"colorscale": "RdYlGn", "cmin": -LOG_DEC_SCALE[1] / 5, "cmid": 0.0,
+            # plotly ignores cmid beside cmin and cmax: the scale's own stops put yellow at 0
+            # (a lightly damped mode is yellow-green, only a negative decrement red)
+            coloraxis={"colorscale": LOG_DEC_COLOURS, "cmin": -LOG_DEC_SCALE[1] / 5,
                        "cmax": LOG_DEC_SCALE[1],
                        "colorbar": {"title": {"text": "log dec"}}})
         if self.speed_range_rpm:

@@ -119,3 +119,31 @@ def test_an_unbalanced_modal_names_a_load_the_model_has():
         gm.modal(m, loads={"pinion.torque": 10.0})
     bal = gm.balance(m, {"pinion.torque": 10.0}, on="wheel.torque")
     assert gm.modal(m, loads=bal) is not None
+
+
+def test_campbell_order_labels_do_not_cover_each_other():
+    """The 600 kW drivetrain's order lines: 3P and the stage-1 planet pass (the same order)
+    share one label; no two labels' boxes overlap, none covers the legend, all lie in the
+    plot; in the interactive diagram a log decrement of 0 is yellow, not orange-red."""
+    import importlib
+
+    cm = importlib.import_module("gearmodal.campbell")  # gm.campbell is the function
+
+    orders = {"1P": 1.0, "3P": 3.0, "stage1 mesh": 99.0, "2x stage1 mesh": 198.0,
+              "stage2 mesh": 468.6, "2x stage2 mesh": 937.1, "stage3 mesh": 1792.8,
+              "2x stage3 mesh": 3585.6, "stage1 planet pass": 3.0}
+    legend = (0.0, 9.0, 45.0, 60.0)
+    at = cm.order_labels(orders, list(orders), 30.0, 60.0, (legend,))
+    assert "3P = stage1 planet pass" in at and len(at) == 8
+    h = 0.04 * 60.0
+    boxes = []
+    for text, (x, y, ha) in at.items():
+        w = 0.0105 * 30.0 * len(text)
+        boxes.append((x - w, x, y, y + h) if ha == "right" else (x, x + w, y, y + h))
+        assert 0.0 <= boxes[-1][0] and boxes[-1][1] <= 30.0 and 0.0 <= y <= 60.0, text
+    for i, a in enumerate(boxes + [legend]):
+        for b in boxes[i + 1:]:
+            assert not (a[0] < b[1] and b[0] < a[1] and a[2] < b[3] and b[2] < a[3])
+    stops = dict((round(p, 6), c) for p, c in cm.LOG_DEC_COLOURS)
+    zero = -cm.LOG_DEC_SCALE[1] / 5
+    assert stops[round((0.0 - zero) / (cm.LOG_DEC_SCALE[1] - zero), 6)] == "#ffffbf"
