@@ -88,6 +88,7 @@ def test_at_rest_on_its_equilibrium_and_force_columns():
     assert np.allclose(res.forces["b.y"], 400.0, rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_exact_matches_tight_scipy_on_the_facets():
     """A load turning at 1 Hz rolls the damped puck around its clearance (hundreds of ramp
     switches): the exact method and DOP853 at rtol 1e-12 on the same contacts agree to
@@ -143,6 +144,7 @@ def test_toml_polygon_carrier_bearing():
     assert sum(e == "carrier_bearing" for e in c.element) == 36
 
 
+@pytest.mark.slow
 def test_round_clearance_by_scipy_and_polygon_convergence():
     """The exactly round clearance (scipy only) under a turning load that rolls the damped
     puck around it: its radial deflection and bearing force agree with the polygon's within

@@ -12,6 +12,7 @@ from gearmodal.cli import main
 MODEL = "studies/models/600kw.toml"
 
 
+@pytest.mark.slow
 def test_campbell_report_600kw(tmp_path):
     out = tmp_path / "r"
     assert main(["campbell", MODEL, "--out", str(out), "--speeds", "0:27:28", "--quiet"]) == 0

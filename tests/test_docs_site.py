@@ -11,6 +11,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow
 def test_the_site_builds_strict(tmp_path):
     pytest.importorskip("mkdocstrings", reason="the docs extra: pip install -e '.[docs]'")
     r = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir",

@@ -84,6 +84,7 @@ def test_run_fatigue_of_a_constant_load_state():
         drivetrain_fatigue(res, bearing_C=2e6, planet_spin=2.5, t_skip=10.0)
 
 
+@pytest.mark.slow
 def test_study_fatigue_shortened(tmp_path):
     """The quick set shortened to 16 s runs: both gearboxes on the same seeds, the columns
     the issue names, a lifetime table with the clearance/reference ratio, a report; the
@@ -147,6 +148,7 @@ def test_lifetime_ratios_over_the_seeds_against_a_hand_calculation():
     assert row.n == 3 and bool(row.differs)
 
 
+@pytest.mark.slow
 def test_study_fatigue_on_a_dask_local_cluster(tmp_path):
     """The set on the sweep's executors: a Dask LocalCluster (two worker processes) runs a
     shortened set with two paired seeds, the same rows as the local process pool's to 1e-12

@@ -80,6 +80,7 @@ def report(tmp_path_factory):
     return (out / "report.html").read_text()
 
 
+@pytest.mark.slow
 def test_campbell_report_renders_without_errors(report, tmp_path):
     got = _render(report, tmp_path)
     assert got["errors"] == [] and got["broken"] == []
@@ -87,6 +88,7 @@ def test_campbell_report_renders_without_errors(report, tmp_path):
     assert report.count("id='mode-") >= 10  # each linked mode has its anchor
 
 
+@pytest.mark.slow
 def test_the_probe_sees_a_script_error_and_a_broken_image(tmp_path):
     page = ("<!DOCTYPE html><html><head><title>x</title></head><body>"
             "<img alt='broken' src='data:image/png;base64,AAAA'>"

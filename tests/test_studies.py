@@ -124,6 +124,7 @@ def test_a_sweep_killed_mid_run_resumes_with_only_the_unfinished_cases(tmp_path)
                                                              rel=1e-12)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_runs_the_sweep(tmp_path):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -196,6 +197,7 @@ def test_summarize_is_the_same_for_a_stage_inside_a_drivetrain():
         assert b[key] == pytest.approx(value, rel=1e-12, abs=1e-12), key
 
 
+@pytest.mark.slow
 def test_study_double_contact_shortened(tmp_path, capsys):
     out = tmp_path / "dc"
     assert main(["study", "double-contact", "--duration", "0.6", "--out", str(out),
@@ -222,6 +224,7 @@ def test_study_double_contact_shortened(tmp_path, capsys):
     assert {p: p.stat().st_mtime_ns for p in rows} == rows
 
 
+@pytest.mark.slow
 def test_study_load_sharing_k_gamma_against_torque(tmp_path):
     """gearmodal study load-sharing (issue 21): with the reference carrier bearing, no gravity
     and no error the three planets share exactly (K_gamma = 1, the planet bearing the torque

@@ -91,6 +91,7 @@ def test_bearing_clearance_closes_under_step_load(propagator):
     assert list(ev.state_after.iloc[:2]) == ["closed", "open"]
 
 
+@pytest.mark.slow
 def test_undamped_energy_is_conserved_over_many_switches(propagator):
     """No loads, no damping: the mechanical energy stays constant through 1e5
     contact switches. The rigid-body mode is started at rest so that the angles stay small

@@ -130,6 +130,7 @@ def test_load_dt_is_checked():
         gm.simulate(block(), 0.01, dt=1e-4, load_dt=0.0, loads={"body.force_x": math.sin})
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rpm", [600.0, -600.0])
 def test_harmonic_load_on_turning_geometry_matches_time_varying_scipy(rpm):
     """The double-contact stage turning at +-600 rpm with its shaft-end force as a harmonic
