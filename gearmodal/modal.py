@@ -287,10 +287,18 @@ class ModalResult:
             ax.set_aspect("equal")
             ax.relim()
             ax.autoscale_view()
-            pad = 1.3 * size
-            xs, ys = sub.x.to_numpy(), sub.y.to_numpy()
-            ax.set_xlim(xs.min() - pad, xs.max() + pad)
-            ax.set_ylim(ys.min() - pad, ys.max() + pad)
+            # the panel holds every body at rest and displaced, with its radius (a displaced
+            # gear at the panel's edge was clipped)
+            rad = np.where(np.isfinite(sub.radius), sub.radius, dot).astype(float)
+            xs = np.concatenate([sub.x - rad, sub.x + sub.dx - rad, sub.x + rad,
+                                 sub.x + sub.dx + rad])
+            ys = np.concatenate([sub.y - rad, sub.y + sub.dy - rad, sub.y + rad,
+                                 sub.y + sub.dy + rad])
+            pad = 0.15 * size
+            if any(roles[n] == "housing" for n in names):
+                pad = max(pad, 1.2 * size)  # the housing's square
+            ax.set_xlim(np.nanmin(xs) - pad, np.nanmax(xs) + pad)
+            ax.set_ylim(np.nanmin(ys) - pad, np.nanmax(ys) + pad)
             ax.set_xlabel("x [m]")
             ax.set_ylabel("y [m]")
             stage = next((n.split(".", 1)[0] for n in names if "." in n), "")

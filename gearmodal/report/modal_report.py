@@ -67,7 +67,7 @@ def _all_shapes(res: ModalResult, skip=()) -> str:
             continue
         fig = res.plot_shape(i)
         buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=55)
+        fig.savefig(buf, format="png", dpi=85)  # readable at the page's width (55 was not)
         plt.close(fig)
         b64 = base64.b64encode(buf.getvalue()).decode()
         parts.append(f"<div id='mode-{i:02d}' class='shape'><h3>Mode {i}: "
