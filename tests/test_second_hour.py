@@ -147,3 +147,21 @@ def test_campbell_order_labels_do_not_cover_each_other():
     stops = dict((round(p, 6), c) for p, c in cm.LOG_DEC_COLOURS)
     zero = -cm.LOG_DEC_SCALE[1] / 5
     assert stops[round((0.0 - zero) / (cm.LOG_DEC_SCALE[1] - zero), 6)] == "#ffffbf"
+
+
+def test_radians_in_other_degree_keys_are_caught_too():
+    """A component file's gear (``pressure_angle_deg``) and a Lin & Parker stage's per-mesh
+    pressure angles in degrees get the same hint; radians under the plain key stay exact."""
+    from gearmodal.model.components import Gear
+    from gearmodal.model.file_schema import PER_MESH_ANGLE
+
+    gear = {"name": "g", "teeth": 20, "module": 0.01, "pressure_angle_deg": 0.349,
+            "mass": 1.0, "inertia": 1.0}
+    with pytest.raises(gm.ModelError, match=r"give pressure_angle_deg = 20"):
+        Gear.SCHEMA.read("bodies.g", gear)
+    rad = {**{k: x for k, x in gear.items() if k != "pressure_angle_deg"},
+           "pressure_angle": 0.349}
+    assert Gear.SCHEMA.read("bodies.g", rad)["pressure_angle"] == 0.349
+    with pytest.raises(gm.ModelError, match=r"sun_planet = 0\.349 deg: .* give 20"):
+        PER_MESH_ANGLE.read("lin_parker_stage.pressure_angle_deg",
+                            {"sun_planet": 0.349, "ring_planet": 20.0})

@@ -332,9 +332,9 @@ Gear.SCHEMA = Table("bodies (kind = \"gear\")", (
     Field("module", "number", "m", low=0.0, low_open=True, high=1.0, default=REQUIRED,
           doc="normal module (10 mm = 0.010)", limits="module"),
     Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 4, high_open=True,
-          default=REQUIRED, doc="normal pressure angle"),
+          default=REQUIRED, doc="normal pressure angle", deg_floor=10.0),
     Field("helix_angle", "angle", "rad", low=-math.pi / 4, high=math.pi / 4, high_open=True,
-          default=0.0, doc="helix angle, signed (positive = right hand)"),
+          default=0.0, doc="helix angle, signed (positive = right hand)", deg_floor=1.0),
     Field("face_width", "number", "m", low=0.0, low_open=True, doc="face width"),
     Field("internal", "boolean", default=False, doc="internal teeth (a ring)"),
     *_BODY_FIELDS[1:]), "A gear wheel.", extra_keys=("kind",))

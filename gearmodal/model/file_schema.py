@@ -157,9 +157,9 @@ LIN_PARKER = Table("lin_parker_stage", (
     "Lin & Parker's (1999) planar stage in their notation.")
 PER_MESH_ANGLE = Table("lin_parker_stage pressure angles", (
     Field("sun_planet", "number", "deg", low=math.degrees(1e-6), high=90.0, high_open=True,
-          default=REQUIRED, doc="sun-planet meshes"),
+          default=REQUIRED, doc="sun-planet meshes", deg_floor=10.0),
     Field("ring_planet", "number", "deg", low=math.degrees(1e-6), high=90.0, high_open=True,
-          default=REQUIRED, doc="ring-planet meshes")),
+          default=REQUIRED, doc="ring-planet meshes", deg_floor=10.0)),
     "Lin & Parker's pressure angles per mesh kind, in degrees.")
 PER_MESH = Table("per mesh (sun_planet, ring_planet)", (
     Field("sun_planet", "number", "N/m", **_NONNEG, default=REQUIRED, doc="sun-planet meshes",

@@ -128,6 +128,11 @@ class Field:
         t = self.type
         if t in ("number", "angle"):
             x = v.number(path, value, self.unit)
+            if self.unit == "deg" and self.deg_floor is not None \
+                    and 0.0 < abs(x) < self.deg_floor:
+                raise ModelError(path, f"= {x!r} deg: a pressure angle under "
+                                 f"{self.deg_floor:g} deg is not a gear a drivetrain has; if "
+                                 f"{x!r} is in radians, give {math.degrees(x):.4g}")
             self._in_range(path, x)
             return x
         if t == "integer":
@@ -387,6 +392,9 @@ def reference_markdown(sections: list[tuple[str, str, list[Table]]]) -> str:
                 rng = f.range_text()
                 if rng == f.unit:  # no bounds: the unit column says it
                     rng = ""
+                if f.unit == "deg" and f.deg_floor is not None and f.low is not None \
+                        and f.low > 0 and f.high is not None:  # a plausible angle in degrees
+                    rng = f"in [{f.deg_floor:g}, {f.high:g}{')' if f.high_open else ']'} deg"
                 if f.degrees and (f.low is not None or f.high is not None):
                     lo = "" if f.low is None else f"{math.degrees(f.low):.6g}"
                     hi = "" if f.high is None else f"{math.degrees(f.high):.6g}"
