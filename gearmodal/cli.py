@@ -10,7 +10,9 @@ traceback and the exit status is 2.
 from __future__ import annotations
 
 import argparse
+import errno
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -401,6 +403,25 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: errors of writing the output, reported in one line (not a bug of gearmodal)
+_WRITE_ERRORS = {errno.EACCES, errno.EPERM, errno.EROFS, errno.ENOSPC, errno.EDQUOT,
+                 errno.ENOTDIR, errno.EISDIR}
+
+
+def _check_writable(folder: str) -> None:
+    """``--out`` can be written: made if missing and a file created and removed in it;
+    otherwise a :class:`ModelError` naming the folder and the cause."""
+    p = Path(folder)
+    probe = p / f".gearmodal-write-test-{os.getpid()}"
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as e:
+        raise ModelError("--out", f"= {folder!r}: cannot write there ({e.strerror or e})") \
+            from None
+
+
 def _out_folder(value: str) -> str:
     """``--out``: a folder to write into (made if missing), not a file, not empty."""
     if not value or "\x00" in value:
@@ -421,6 +442,8 @@ def main(argv=None) -> int:
         argv.remove("--debug")
     args = build_parser().parse_args(argv)
     try:
+        if getattr(args, "out", None):
+            _check_writable(args.out)  # before any computing
         return args.func(args)
     except ModelError as e:
         print(f"gearmodal: error: {e}", file=sys.stderr)
@@ -431,8 +454,13 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("gearmodal: interrupted", file=sys.stderr)
         return 130
-    except Exception as e:  # a bug, not the input: one line, and how to see and report it
-        if debug:
+    except Exception as e:
+        if isinstance(e, OSError) and e.errno in _WRITE_ERRORS:
+            # the output cannot be written (a full disk, a read-only folder): one line
+            print(f"gearmodal: error: cannot write {e.filename or 'the output'}: "
+                  f"{e.strerror}", file=sys.stderr)
+            return 2
+        if debug:  # a bug, not the input: one line, and how to see and report it
             raise
         print(f"gearmodal: internal error: {type(e).__name__}: {str(e)[:300]} (a bug: please "
               "report it with the command; add --debug for the traceback)", file=sys.stderr)

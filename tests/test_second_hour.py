@@ -165,3 +165,31 @@ def test_radians_in_other_degree_keys_are_caught_too():
     with pytest.raises(gm.ModelError, match=r"sun_planet = 0\.349 deg: .* give 20"):
         PER_MESH_ANGLE.read("lin_parker_stage.pressure_angle_deg",
                             {"sun_planet": 0.349, "ring_planet": 20.0})
+
+
+def test_an_unwritable_output_folder_is_one_line_before_any_computing(tmp_path, capsys,
+                                                                      monkeypatch):
+    """``--out`` under a file (not a folder), and a write that fails mid-run (a full disk,
+    simulated): one line naming the folder or the file and the cause, exit status 2, not an
+    internal error. (Root writes into read-only folders, so CI cannot test those directly.)"""
+    from gearmodal.cli import main
+
+    (tmp_path / "file").write_text("x")
+    assert main(["simulate", "studies/scenes/gear_rattle.toml", "--out",
+                 str(tmp_path / "file" / "run")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--out = " in err and "cannot write there" in err
+    import errno
+
+    import gearmodal.result_io as rio
+
+    def full(*a, **k):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "x.parquet"))
+
+    monkeypatch.setattr(rio, "write_table", full)
+    monkeypatch.setattr("gearmodal.integrate.result.write_table", full)
+    assert main(["simulate", "studies/scenes/gear_rattle.toml", "--out", str(tmp_path / "r"),
+                 "--t-end", "0.01", "--format", "csv"]) == 2
+    err = capsys.readouterr().err
+    assert "cannot write" in err and "No space left on device" in err
+    assert "internal error" not in err
