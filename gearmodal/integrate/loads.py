@@ -119,10 +119,36 @@ def _timed(kt, ku, hu, hnu, t: np.ndarray, m: int) -> np.ndarray:
 
 
 def _series(name: str, val: pd.Series) -> tuple[np.ndarray, np.ndarray]:
+    """A Series load's knots: its index in seconds (numbers; a datetime or timedelta index
+    would be read in nanoseconds: refused, naming the conversion) and its numeric values."""
+    if not pd.api.types.is_numeric_dtype(val.index.dtype) \
+            or pd.api.types.is_bool_dtype(val.index.dtype):
+        hint = " (a time index: give seconds, e.g. s.index = (s.index - s.index[0])" \
+            ".total_seconds())" if isinstance(val.index, (pd.DatetimeIndex,
+                                                           pd.TimedeltaIndex)) else ""
+        raise ModelError(f"loads.{name}", f"a Series must be indexed by time in s, got an "
+                         f"index of {val.index.dtype}{hint}")
+    if not pd.api.types.is_numeric_dtype(val.dtype) or pd.api.types.is_bool_dtype(val.dtype):
+        raise ModelError(f"loads.{name}", f"a Series of {val.dtype} values: expected numbers "
+                         "(N or N m)")
     idx = np.asarray(val.index, dtype=float)
     if len(idx) < 1 or np.any(np.diff(idx) <= 0):
         raise ModelError(f"loads.{name}", "a Series must be indexed by increasing time")
     return idx, val.to_numpy(dtype=float)
+
+
+def _probe(name: str, f) -> None:
+    """Call a load function once at t = 0 before the run: a clear error naming the load when
+    it takes no time argument or does not give one finite number."""
+    try:
+        y = f(0.0)
+    except TypeError as err:
+        raise ModelError(f"loads.{name}", f"the callable must take the time in s: {err}") \
+            from None
+    if isinstance(y, (bool, np.bool_)) or not isinstance(y, (int, float, np.number)) \
+            and not (isinstance(y, np.ndarray) and y.shape == ()):
+        raise ModelError(f"loads.{name}", f"the callable gave {type(y).__name__} {y!r:.60} at "
+                         "t = 0: it must give one number (N or N m) per time")
 
 
 def load_paths(names: list[str], loads: dict | None, t_end: float,
@@ -131,6 +157,9 @@ def load_paths(names: list[str], loads: dict | None, t_end: float,
     from 0 to ``t_end`` s, by the columns ``names``; a callable is sampled every ``load_dt``
     s (and at ``t_end``). Errors name the load."""
     m = len(names)
+    if loads is not None and not hasattr(loads, "items"):
+        raise ModelError("loads", f"expected {{load name: value}} (a dict), got "
+                         f"{type(loads).__name__}")
     const = np.zeros(m)
     harm_u, harm_nu = [], []
     series: dict[int, tuple[np.ndarray, np.ndarray]] = {}
@@ -165,6 +194,7 @@ def load_paths(names: list[str], loads: dict | None, t_end: float,
                 raise ModelError("load_dt", f"= {load_dt!r}: {n:.3g} samples of loads.{name}; "
                                  f"at most {MAX_KNOTS:.0e} (a longer load_dt)")
             idx = np.arange(n + 1) * load_dt  # the last at or after the end
+            _probe(name, val)
             try:
                 y = np.array([float(val(tt)) for tt in idx])
             except (TypeError, ValueError) as err:
