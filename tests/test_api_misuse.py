@@ -50,3 +50,18 @@ def test_good_options_still_run():
                                                    "wheel.torque": lambda t: -4.0 * t / 1e-3},
                       max_events_per_step=50)
     assert np.isfinite(sim.q.to_numpy()).all()
+
+
+def test_scipy_at_rest_on_a_flank_does_not_loop():
+    """The gear pair at rest with its front flank at zero gap and no loads: solve_ivp's event
+    is zero throughout, and the reference method restarted 1e-6 dt apart for ever (1 ms did
+    not end in 20 s). The contact now rests until the next output time: a few restarts per
+    step, no events; with a torque it closes as the exact method's does."""
+    sim = gm.simulate(PAIR, 1e-3, dt=1e-4, method="scipy")
+    assert len(sim.events) == 0 and sim.stats["nfev"] < 5000
+    loads = {"pinion.torque": 1.0, "wheel.torque": -2.0}
+    sp = gm.simulate(PAIR, 1e-3, dt=1e-4, method="scipy", loads=loads)
+    ex = gm.simulate(PAIR, 1e-3, dt=1e-4, loads=loads)
+    assert list(sp.events.contact) == list(ex.events.contact) == ["front"]
+    np.testing.assert_allclose(sp.q.to_numpy(), ex.q.to_numpy(), rtol=0,
+                               atol=1e-5 * np.abs(ex.q.to_numpy()).max())
