@@ -20,6 +20,7 @@ frame against fixed supports are frozen at the input azimuth given to :func:`ass
 
 from __future__ import annotations
 
+import math
 import pickle
 import weakref
 from dataclasses import dataclass, field
@@ -250,13 +251,23 @@ class Assembly:
     def load_vector(self, loads: dict | None) -> np.ndarray:
         """Generalised force ``B u`` for a mapping ``{load name: value}`` (N, N m)."""
         f = np.zeros(self.n)
+        if loads is not None and not hasattr(loads, "items"):
+            raise ModelError("loads", f"expected {{load name: value}} (a dict), got "
+                             f"{type(loads).__name__}")
         for key, value in (loads or {}).items():
             try:
                 j = self.load_names.index(key)
             except ValueError:
                 raise ModelError(f"loads.{key}", unknown("load", key, self.load_names)) \
                     from None
-            f += self.B[:, j] * float(value)
+            try:
+                u = float(value)
+            except (TypeError, ValueError):
+                raise ModelError(f"loads.{key}", f"= {value!r}: expected a number (N or N m)") \
+                    from None
+            if not math.isfinite(u):
+                raise ModelError(f"loads.{key}", f"= {u!r}: must be finite (N or N m)")
+            f += self.B[:, j] * u
         return f
 
 

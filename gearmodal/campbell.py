@@ -458,7 +458,12 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
 
     if not isinstance(model, (Model, Coupled)):
         raise TypeError(f"expected a gm.Model or gm.Coupled, got {type(model).__name__}")
-    s = np.asarray(speeds_rpm, dtype=float).ravel()
+    try:
+        s = np.asarray(speeds_rpm, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ModelError("speeds_rpm", f"= {speeds_rpm!r}: expected an array of speeds in rpm "
+                         "(e.g. np.linspace(0, 30, 31); the command line's '0:30:31' is "
+                         "text)") from None
     if s.size < 2 or not np.all(np.isfinite(s)) or np.any(s < 0) or np.any(np.diff(s) <= 0):
         raise ModelError("speeds_rpm", "must be at least two finite, increasing speeds >= 0 rpm")
     plausible("speeds_rpm", float(s[-1]), "speed_rpm")

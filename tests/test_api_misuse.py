@@ -65,3 +65,27 @@ def test_scipy_at_rest_on_a_flank_does_not_loop():
     assert list(sp.events.contact) == list(ex.events.contact) == ["front"]
     np.testing.assert_allclose(sp.q.to_numpy(), ex.q.to_numpy(), rtol=0,
                                atol=1e-5 * np.abs(ex.q.to_numpy()).max())
+
+
+def test_modal_campbell_balance_refuse_bad_loads_and_speeds():
+    with pytest.raises(gm.ModelError, match=r"^speeds_rpm = '0:10:5': expected an array"):
+        gm.campbell(PAIR, "0:10:5")
+    with pytest.raises(gm.ModelError, match=r"loads\.pinion\.torque = nan: must be finite"):
+        gm.modal(PAIR, loads={"pinion.torque": np.nan, "wheel.torque": 0.0})
+    with pytest.raises(gm.ModelError, match=r"loads\.pinion\.torque = nan: must be finite"):
+        gm.balance(PAIR, {"pinion.torque": float("nan")}, on="wheel.torque")
+    with pytest.raises(gm.ModelError, match=r"loads\.pinion\.torque = 'x': expected a number"):
+        gm.campbell(PAIR, [0.0, 10.0], loads={"pinion.torque": "x"})
+
+
+def test_a_run_that_cannot_fit_in_memory_is_refused_up_front(monkeypatch):
+    """Rows the machine cannot hold are refused before anything is allocated, saying how
+    much and what to change (the available memory pinned at 1 GB: the test does not depend on
+    the machine)."""
+    from gearmodal.integrate import driver
+
+    monkeypatch.setattr(driver, "available_memory", lambda: 1e9)
+    with pytest.raises(gm.ModelError, match=r"would hold 10,000,001 output rows .* 1 GB "
+                                            r"available: a longer dt"):
+        gm.simulate(PAIR, 10.0, dt=1e-6)
+    assert len(gm.simulate(PAIR, 1e-3, dt=1e-4).t) == 11

@@ -25,7 +25,7 @@ from ..errors import ModelError, unknown
 from ..model import validate as v
 from ..model.model import Model
 from .azimuth import AzimuthAssembler
-from .driver import METHODS, Driver, Method, event_rows, get_method
+from .driver import METHODS, Driver, Method, check_fits, event_rows, get_method
 from .loads import LOAD_DT, Harmonic, load_paths
 from .peaks import PEAK_BIN, peak_table
 from .record import ForceMap, Recorder, event_table
@@ -35,8 +35,9 @@ from .system import PiecewiseLinearSystem
 #: most output steps of a run (each a row of the result's tables)
 MAX_STEPS = 5e7
 
-__all__ = ["LOAD_DT", "METHODS", "PEAK_BIN", "Driver", "Harmonic", "Method", "SimulationResult",
-           "build_result", "event_array", "get_method", "reconcile", "simulate"]
+__all__ = ["LOAD_DT", "METHODS", "PEAK_BIN", "Driver", "Harmonic", "Method", "Recorder",
+           "SimulationResult", "build_result", "check_fits", "event_array", "get_method",
+           "reconcile", "simulate", "stored_result"]
 
 
 def _initial(asm: Assembly, values, label: str) -> np.ndarray:
@@ -184,6 +185,11 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
             geo = AzimuthAssembler(model)
     else:
         raise TypeError(f"expected a gm.Model or gm.Coupled, got {type(model).__name__}")
+    nc = len(asm.contacts.element) if asm.contacts is not None else 0
+    check_fits(n_steps + 1, 2 * asm.n + nc + (len(asm.springs) if asm.springs is not None
+                                               else 0),
+               "a longer dt (with the exact method it only places the rows) or a shorter "
+               "t_end")
     t = np.arange(n_steps + 1) * dt
     cpu = time.process_time()
     system = PiecewiseLinearSystem(asm, speed_rpm, geometry=geo)

@@ -265,6 +265,30 @@ class Driver:
         return X, S, ev
 
 
+def available_memory() -> float | None:
+    """Bytes of memory the machine has available (Linux ``MemAvailable``), or None."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    return None
+
+
+def check_fits(rows: int, values: int, advice: str) -> None:
+    """Refuse a run whose ``rows`` output rows of ``values`` float64 values each would not fit
+    in the memory the machine has available (with the run's other arrays: taken as twice the
+    rows), naming what it would need and ``advice`` (how to reduce it)."""
+    need = 2.0 * rows * values * 8.0
+    have = available_memory()
+    if have is not None and need > 0.8 * have:
+        raise ModelError("t_end", f"the run would hold {rows:,} output rows of {values} values "
+                         f"in memory, about {need / 1e9:.3g} GB; this machine has "
+                         f"{have / 1e9:.3g} GB available: {advice}")
+
+
 def event_rows(ev) -> np.ndarray:
     """Event rows as an (n, 8) array: the six of every method, then the peak of the episode a
     row ends and its time (NaN where a method gives none)."""

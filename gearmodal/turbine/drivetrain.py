@@ -67,6 +67,7 @@ from ..integrate import (
     Recorder,
     SimulationResult,
     build_result,
+    check_fits,
     get_method,
     mesh_stiffness,
     stored_result,
@@ -377,6 +378,11 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
 
     n_aero = int(math.ceil(t_end / aero_dt - 1e-9))
     n_steps = n_aero * m_sub
+    if out is None:
+        nsp = len(asm0.springs) if asm0.springs is not None else 0
+        check_fits(n_steps + 1, 4 * n + len(asm0.contacts.element) + nsp,
+                   "give out=DIR (the rows go to disk as the run goes; gearmodal simulate "
+                   "does), a longer dt or a shorter t_end")
     om_f = rotor_speed0_rpm * RPM  # reference speed and azimuth at the last re-basing
     psi_f = math.radians(azimuth0_deg)
     t_f = 0.0
