@@ -89,3 +89,28 @@ def test_a_run_that_cannot_fit_in_memory_is_refused_up_front(monkeypatch):
                                             r"available: a longer dt"):
         gm.simulate(PAIR, 10.0, dt=1e-6)
     assert len(gm.simulate(PAIR, 1e-3, dt=1e-4).t) == 11
+
+
+def test_dumps_writes_names_loads_reads():
+    """Names with a character beyond the BMP, a tab, DEL, quotes and backslashes: gm.dumps
+    writes TOML that gm.loads reads back to the same name (JSON's surrogate escapes were not
+    TOML)."""
+    m = gm.load("studies/models/gear_pair.toml")
+    for name in ["pair \U0001F600", "tab\there", "del\x7fx", 'quote"b\\s', "ünïcode"]:
+        m.name = name
+        assert gm.loads(gm.dumps(m)).name == name
+
+
+def test_a_planet_count_beyond_any_gearbox_is_refused():
+    """10 000 planets allocated until memory ran out; a stage takes at most 32, from a file or
+    from Python."""
+    sun = gm.Gear(21, 0.01, np.radians(20), mass=80.0, inertia=0.45, name="sun")
+    planet = gm.Gear(39, 0.01, np.radians(20), mass=140.0, inertia=3.6, name="planet")
+    ring = gm.Gear(99, 0.01, np.radians(20), mass=620.0, inertia=190.0, name="ring",
+                   internal=True)
+    with pytest.raises(gm.ModelError, match=r"n_planets = 10000: at most 32 planets"):
+        gm.planetary_stage(sun, planet, ring, n_planets=10_000, carrier_mass=1000.0,
+                           carrier_inertia=110.0, mesh_stiffness=1e9)
+    stage = gm.planetary_stage(sun, planet, ring, n_planets=3, carrier_mass=1000.0,
+                               carrier_inertia=110.0, mesh_stiffness=1e9)
+    assert len(stage.groups["planets"]) == 3

@@ -196,7 +196,7 @@ def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing:
     the rotational coordinate ``r theta`` (m). Front flanks follow Lin & Parker's mesh
     deflections ``delta_sn``, ``delta_rn`` (compressed by a positive sun rotation).
     """
-    n_planets = v.integer("lin_parker_stage.n_planets", n_planets, minimum=1)
+    n_planets = v.planets("lin_parker_stage.n_planets", n_planets)
     for label, table, keys in (("mass", mass, (*_CENTRAL, "planet")),
                                ("inertia_over_r2", inertia_over_r2, (*_CENTRAL, "planet")),
                                ("bearing", bearing, (*_CENTRAL, "planet")),
@@ -419,7 +419,7 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
     ``1 + z_ring/z_sun``. A positive carrier torque closes the front flanks.
     """
     v.choice(f"{name}.dofs", dofs, DOF_LEVELS)
-    n_planets = v.integer(f"{name}.n_planets", n_planets, minimum=1)
+    n_planets = v.planets(f"{name}.n_planets", n_planets)
     s = _gear(sun, f"{name}.sun", "sun", dofs)
     p = _gear(planet, f"{name}.planet", "planet", dofs)
     r = _gear(ring, f"{name}.ring", "ring", dofs)

@@ -147,7 +147,14 @@ def to_toml(doc: dict) -> str:
 
 
 def _key(k: str) -> str:
-    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k)
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else _string(k)
+
+
+def _string(text: str) -> str:
+    """A TOML basic string: the characters as they are (JSON's ``\\ud83d\\ude00`` for one
+    beyond the BMP is no TOML escape: a name with an emoji wrote a file ``gm.loads``
+    refused), quotes, backslashes and control characters escaped (DEL too, as TOML asks)."""
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 def _value(x) -> str:
@@ -165,7 +172,7 @@ def _value(x) -> str:
             text = np.format_float_scientific(x, unique=True, trim="-")
         return text
     if isinstance(x, str):
-        return json.dumps(x)
+        return _string(x)
     if isinstance(x, (list, tuple)):
         return "[" + ", ".join(_value(y) for y in x) + "]"
     if isinstance(x, dict):

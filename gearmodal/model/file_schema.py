@@ -92,7 +92,7 @@ _STAGE_COMMON = (
     _ALTERNATION)
 PLANETARY = Table("planetary stage (`[planetary_stage]` or a `[[stages]]` entry)", (
     *_STAGE_COMMON,
-    Field("n_planets", "integer", low=1, default=3, doc="number of planets"),
+    Field("n_planets", "integer", low=1, high=32, default=3, doc="number of planets"),
     Field("planet_angles", "vector", "rad", degrees=True,
           doc="planet positions (default equally spaced)"),
     Field("carrier", "table", default=REQUIRED, doc="the carrier (carrier table)"),
@@ -139,7 +139,7 @@ GEAR_PAIR = Table("gear_pair", (
     _ALTERNATION),
     "Two external gears on bearings.")
 LIN_PARKER = Table("lin_parker_stage", (
-    Field("n_planets", "integer", low=1, default=REQUIRED, doc="number of planets"),
+    Field("n_planets", "integer", low=1, high=32, default=REQUIRED, doc="number of planets"),
     Field("pressure_angle_deg", "per_mesh", "deg", default=REQUIRED,
           doc="pressure angle, a number or {sun_planet, ring_planet}"),
     Field("planet_angles", "vector", "rad", degrees=True,

@@ -83,6 +83,20 @@ def nonnegative(field: str, value, unit: str = "") -> float:
     return number(field, value, unit, minimum=0.0)
 
 
+#: the most planets a stage may have: wind-turbine gearboxes have 3 to 7, special designs up
+#: to about 12; a larger number is a typo (10 000 planets allocated until memory ran out)
+MAX_PLANETS = 32
+
+
+def planets(field: str, value) -> int:
+    """A planet count: an integer from 1 to :data:`MAX_PLANETS`."""
+    n = integer(field, value, minimum=1)
+    if n > MAX_PLANETS:
+        raise ModelError(field, f"= {n}: at most {MAX_PLANETS} planets (wind-turbine gearboxes "
+                         "have 3 to 7)")
+    return n
+
+
 def integer(field: str, value, *, minimum: int) -> int:
     """An integer >= ``minimum`` (tooth and planet counts)."""
     if isinstance(value, bool) or not isinstance(value, int):
