@@ -134,6 +134,55 @@ def _scene_identity(scene) -> dict:
     return {"scene": str(p.resolve()), "scene_sha256": load_scene(p).identity()}
 
 
+def _worker_start() -> None:
+    """A sweep's pool worker: Ctrl-C is its parent's to handle (every worker printed its own
+    traceback), and it ends with its parent, a kill -9 included (Linux's parent-death
+    signal: two workers of a killed study went on computing for good)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):  # not Linux: the pool's own shutdown only
+        return
+    if os.getppid() == 1:  # the parent died before the signal was set
+        os._exit(1)
+
+
+#: a case's temporary folder older than this (s) was left by a writer that was killed (a
+#: case is written in milliseconds)
+STALE_S = 600.0
+
+
+def _clean_leftovers(root: Path) -> None:
+    """Remove the temporary case folders (``.tmp-<case>-*``) a killed writer left in the
+    store, so that the store holds only whole cases (a folder a running writer still fills is
+    younger than :data:`STALE_S`)."""
+    now = time.time()
+    for d in root.glob(".tmp-*"):
+        try:
+            if now - d.stat().st_mtime > STALE_S:
+                shutil.rmtree(d, ignore_errors=True)
+        except OSError:
+            pass
+
+
+def _terminate_workers(executor) -> None:
+    """End a pool's workers now (Ctrl-C: the interpreter's exit would otherwise wait for the
+    running cases, 36 s on the fatigue set). Python 3.14's ``terminate_workers``; before it,
+    the pool's process table (the same, by hand)."""
+    stop = getattr(executor, "terminate_workers", None)
+    if stop is not None:
+        stop()
+        return
+    for proc in list(getattr(executor, "_processes", {}).values()):
+        proc.terminate()
+    executor.shutdown(wait=True, cancel_futures=True)
+
+
 def _run_case(scene, case: dict, metrics: Callable, blas_threads: int | None,
               save_to: str | None = None) -> tuple:
     """Run one case in a worker: (row, tables, cpu_s); with ``save_to`` the result is also
@@ -285,6 +334,7 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
     if store is not None:
         root = Path(store) / "cases"
         root.mkdir(parents=True, exist_ok=True)
+        _clean_leftovers(root)
         meta_path = Path(store) / "sweep.json"
         old = {}
         if meta_path.exists():
@@ -320,7 +370,9 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
     own = executor is None and todo
     if own:
         executor = cf.ProcessPoolExecutor(max_workers=min(max_workers or os.cpu_count() or 1,
-                                                          len(todo)))
+                                                          len(todo)),
+                                          initializer=_worker_start)
+    interrupted = False
     try:
         saves = {cid: (str(root / f".res-{cid}-{uuid.uuid4().hex[:8]}") if keep_results
                        else None) for cid, _ in todo}
@@ -354,9 +406,14 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
                     _write_case(root, cid, c, row, tables, _saved(saves[cid]))
                 rows[cid] = {**row, "case_id": cid, "cached": False}
             bar.update(1)
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
     finally:
         bar.close()
-        if own:
+        if own and interrupted:  # the running cases are not waited for: their workers end
+            _terminate_workers(executor)
+        elif own:
             executor.shutdown(wait=True, cancel_futures=True)
     params = pd.DataFrame(cases, index=labels)
     res = pd.DataFrame([{**rows[cid], "case_id": cid} for cid in ids], index=labels)
