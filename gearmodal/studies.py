@@ -134,7 +134,7 @@ def _scene_identity(scene) -> dict:
     return {"scene": str(p.resolve()), "scene_sha256": load_scene(p).identity()}
 
 
-def _worker_start() -> None:
+def _worker_start(parent: int) -> None:
     """A sweep's pool worker: Ctrl-C is its parent's to handle (every worker printed its own
     traceback), and it ends with its parent, a kill -9 included (Linux's parent-death
     signal: two workers of a killed study went on computing for good)."""
@@ -148,7 +148,7 @@ def _worker_start() -> None:
         libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
     except (OSError, AttributeError):  # not Linux: the pool's own shutdown only
         return
-    if os.getppid() == 1:  # the parent died before the signal was set
+    if os.getppid() != parent:  # the parent (``parent``'s pid) died before the signal was set
         os._exit(1)
 
 
@@ -371,7 +371,8 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
     if own:
         executor = cf.ProcessPoolExecutor(max_workers=min(max_workers or os.cpu_count() or 1,
                                                           len(todo)),
-                                          initializer=_worker_start)
+                                          initializer=_worker_start,
+                                          initargs=(os.getpid(),))
     interrupted = False
     try:
         saves = {cid: (str(root / f".res-{cid}-{uuid.uuid4().hex[:8]}") if keep_results
