@@ -28,6 +28,7 @@ import shutil
 import tempfile
 import time
 import uuid
+import warnings
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
@@ -224,6 +225,29 @@ def _run_case(scene, case: dict, metrics: Callable, blas_threads: int | None,
     return row, tables, cpu
 
 
+#: a stored case's checksums of its files (``{file name: SHA-256}``)
+CHECKSUMS = "sha256.json"
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def _read_case_file(path: Path) -> pd.DataFrame:
+    """A stored case's table, verified: its SHA-256 against the case's checksums (cases
+    stored before them: the pages' CRCs only) and every page's CRC; ``ValueError`` naming the
+    damage otherwise."""
+    sums = path.parent / CHECKSUMS
+    if sums.exists():
+        try:
+            want = json.loads(sums.read_text()).get(path.name)
+        except (OSError, ValueError) as e:
+            raise ValueError(f"its checksums are unreadable ({e})") from None
+        if want is not None and _sha256(path) != want:
+            raise ValueError(f"{path.name} does not match its checksum")
+    return pd.read_parquet(path, page_checksum_verification=True)
+
+
 def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict,
                 result_dir: Path | None = None) -> None:
     """Write a case atomically: a temporary directory renamed into place when complete (with
@@ -234,9 +258,13 @@ def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict,
     try:
         frame = pd.DataFrame([{**row, "case_id": cid,
                                "parameters_json": _case_json(case)}])
-        frame.to_parquet(tmp / "row.parquet")
+        frame.to_parquet(tmp / "row.parquet", write_page_checksum=True)
         for name, df in tables.items():
-            df.to_parquet(tmp / f"{name}.parquet")
+            df.to_parquet(tmp / f"{name}.parquet", write_page_checksum=True)
+        # each file's SHA-256: damage anywhere in it (a footer's metadata too, which the
+        # pages' CRCs do not cover) is found when the case is read
+        (tmp / CHECKSUMS).write_text(json.dumps(
+            {f.name: _sha256(f) for f in sorted(tmp.glob("*.parquet"))}, indent=1))
         if result_dir is not None:
             os.rename(result_dir, tmp / "result")
         try:
@@ -272,7 +300,11 @@ def load_table(store, case_id: str, name: str) -> pd.DataFrame:
             else []
         raise ModelError("name", f"= {name!r}: case {case_id} has no such table"
                          + (f"; it has: {', '.join(have)}" if have else ""))
-    return pd.read_parquet(path)
+    try:
+        return _read_case_file(path)
+    except (OSError, ValueError) as e:
+        raise ModelError("store", f"= {str(Path(store))!r}: {path.relative_to(Path(store))} "
+                         f"is damaged ({str(e).splitlines()[0][:160]})") from None
 
 
 # -- the sweep ----------------------------------------------------------------------------------
@@ -359,7 +391,15 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
     rows: dict[str, dict] = {}
     for cid in ids:
         if root is not None and (root / cid / "row.parquet").exists():
-            r = pd.read_parquet(root / cid / "row.parquet").iloc[0].to_dict()
+            try:
+                r = _read_case_file(root / cid / "row.parquet").iloc[0].to_dict()
+            except (OSError, ValueError, IndexError) as e:
+                # a damaged case (its checksum fails, truncated, empty): computed again
+                warnings.warn(f"sweep: stored case {cid} is damaged "
+                              f"({str(e).splitlines()[0][:120]}); computing it again",
+                              stacklevel=2)
+                shutil.rmtree(root / cid, ignore_errors=True)
+                continue
             r.pop("parameters_json", None)
             rows[cid] = {**r, "cached": True}
     todo = [(cid, c) for cid, c in zip(ids, cases, strict=True) if cid not in rows]
