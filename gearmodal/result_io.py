@@ -27,7 +27,8 @@ import pandas as pd
 from .errors import ModelError
 
 __all__ = ["FORMATS", "VIEW_ROWS", "TableWriter", "decimated", "read_csv", "read_header",
-           "read_table", "table_chunks", "table_path", "write_header", "write_table"]
+           "read_table", "table_chunks", "table_path", "thin_frame", "write_header",
+           "write_table"]
 
 HEADER = "result.json"
 #: pandas 3 reads floats exactly by default and deprecates ``float_precision``
@@ -284,6 +285,23 @@ def decimated(directory, name: str, columns: list[str], max_rows: int | None = V
                            if columns else np.empty((tb.num_rows, 0)))
 
         groups = read()
+    return _thin(groups, n, columns, max_rows, index_col)
+
+
+def thin_frame(df: pd.DataFrame, max_rows: int = VIEW_ROWS) -> pd.DataFrame:
+    """:func:`decimated` of a table in memory (float columns, indexed by time): the same
+    buckets, each keeping its extremes."""
+    t = df.index.to_numpy(dtype=float)
+    V = df.to_numpy(dtype=float)
+    groups = ((t[a:a + GROUP_ROWS], V[a:a + GROUP_ROWS]) for a in range(0, len(t), GROUP_ROWS))
+    return _thin(groups, len(t), [str(c) for c in df.columns], max_rows,
+                 df.index.name or "time")
+
+
+def _thin(groups, n: int, columns: list[str], max_rows: int | None,
+          index_col: str) -> pd.DataFrame:
+    """Rows of ``groups`` (``(t, V)`` chunks of ``n`` rows in all) in buckets sized for about
+    ``max_rows`` rows, each keeping the rows where a column is largest or smallest."""
     per = 1 if max_rows is None else max(1, int(np.ceil(n * 2 * max(len(columns), 1)
                                                          / max_rows)))
     ts, vs = [], []

@@ -137,7 +137,7 @@ def test_a_damaged_saved_table_is_refused_naming_it(tmp_path):
     _damage(tmp_path / "forces.parquet")
     back = gm.SimulationResult.load(tmp_path)
     with pytest.raises(gm.ModelError, match=r"forces\.parquet is unreadable"):
-        back.forces
+        _ = back.forces
     with pytest.raises(gm.ModelError, match=r"forces\.parquet is unreadable"):
         list(back.force_chunks())
     pd.testing.assert_frame_equal(back.q, sim.q, check_exact=True)  # the others read

@@ -169,6 +169,11 @@ def test_the_figures_view_keeps_every_extreme(tmp_path):
     for c in "abc":
         assert view[c].max() == df[c].max() and view[c].min() == df[c].min()
     assert view.index.is_monotonic_increasing
+    # a table in memory thins to the same view (the rows grouped as a stored table's)
+    result_io.write_table(df, tmp_path, "tab2")
+    pd.testing.assert_frame_equal(result_io.thin_frame(df, 6_000),
+                                  result_io.decimated(tmp_path, "tab2", ["a", "b", "c"], 6_000),
+                                  check_exact=True)
     every = result_io.decimated(tmp_path, "tab", ["b"], max_rows=None)
     pd.testing.assert_frame_equal(every, df[["b"]], check_exact=True)
 

@@ -23,6 +23,7 @@ from ..result_io import (
     remove_table,
     table_chunks,
     table_path,
+    thin_frame,
     write_header,
     write_table,
 )
@@ -573,13 +574,7 @@ class SimulationResult:
         if self.stored is not None and self.__dict__.get("_" + name) is None:
             return decimated(self.stored, name, list(columns), max_rows)
         table = getattr(self, name)[list(columns)]
-        if len(table) <= max_rows:
-            return table
-        import tempfile
-
-        with tempfile.TemporaryDirectory() as td:  # the same decimation as a stored run's
-            write_table(table, td, name)
-            return decimated(td, name, list(columns), max_rows)
+        return table if len(table) <= max_rows else thin_frame(table, max_rows)
 
     def save(self, directory, format: str = "parquet") -> Path:
         """Write the tables ``q``, ``v``, ``forces``, ``events``, ``contact_state``,
