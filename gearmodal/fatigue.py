@@ -217,6 +217,80 @@ def damage_equivalent_load(load, m: float, n_ref: float = N_REF) -> float:
     return _del(rainflow_cycles(load), m, n_ref)
 
 
+def turning_dels(result, exponents, channels: list[str] | None = None, t_from: float = 0.0,
+                 n_ref: float = N_REF) -> pd.DataFrame | None:
+    """DELs (F1) of a run's force channels from the exact solution: the rainflow count of
+    each channel's exact turning points (:attr:`gearmodal.SimulationResult.turning_points`)
+    from ``t_from`` (s) to the run's end, streamed (a stored run a row group at a time, only
+    the residue kept: :class:`RainflowStream`). The count starts at the channel's value at the
+    first output time at or after ``t_from`` (exact: a row of the solution) and takes every
+    turning point after it, so it does not depend on the output step when ``t_from`` is on
+    its grid. One row per channel (``channels``: all by default; a mesh flank ``<mesh>.front``,
+    a bearing's radial force ``<element>.radial``...), one column ``m=<exponent>`` per
+    Woehler exponent; ``None`` when the run has no turning points (a method other than the
+    exact one's Taylor propagator, or ``turning_points=False``)."""
+    ms = [float(m) for m in exponents]
+    for m in ms:
+        if not 1.0 <= m <= 50.0:
+            raise ModelError("m", f"= {m!r}: a Woehler exponent from 1 to 50")
+    if not (isinstance(n_ref, (int, float)) and n_ref > 0 and math.isfinite(n_ref)):
+        raise ModelError("n_ref", f"= {n_ref!r}: a number of cycles > 0")
+    chunks = result.turning_chunks()
+    first = next(chunks, None)
+    if first is None:
+        return None
+    start = _row_at(result, t_from)
+    streams: dict[str, RainflowStream] = {}
+    known = None if channels is None else list(channels)
+    if known is not None:
+        missing = [c for c in known if c not in start.index]
+        if missing:
+            raise ModelError("channels", f"= {missing[0]!r}: not a force channel of the run")
+        for c in known:
+            streams[c] = RainflowStream(ms)
+            streams[c].feed([start[c]])
+    t0 = float(start.name)
+    for chunk in _chain(first, chunks):
+        chunk = chunk[chunk.index > t0]
+        for ch, part in chunk.groupby("channel", sort=False, observed=True):
+            st = streams.get(ch)
+            if st is None:
+                if known is not None or ch not in start.index:
+                    continue
+                st = streams[ch] = RainflowStream(ms)
+                st.feed([start[ch]])
+            st.feed(part["force_N"].to_numpy())
+    rows = {}
+    for ch, st in streams.items():
+        if st.n < 2:  # no turning point after the start: the channel held its value
+            st.feed([st.prev])
+        rows[ch] = [st.damage_equivalent_load(m, n_ref) for m in ms]
+    out = pd.DataFrame.from_dict(rows, orient="index", columns=[f"m={m:g}" for m in ms])
+    out.index.name = "channel"
+    return out
+
+
+def _chain(first, rest):
+    yield first
+    yield from rest
+
+
+def _row_at(result, t_from: float) -> pd.Series:
+    """The force channels' values (every force column and each bearing's radial force
+    ``<element>.radial``) at the first output time at or after ``t_from`` (a Series named by
+    that time)."""
+    for f in result.force_chunks():
+        sel = f[f.index >= t_from - 1e-9 * max(1.0, abs(t_from))]
+        if len(sel):
+            row = sel.iloc[0].copy()
+            for c in list(row.index):
+                el, _, d = c.rpartition(".")
+                if d == "x" and f"{el}.y" in row.index:
+                    row[f"{el}.radial"] = math.hypot(row[c], row[f"{el}.y"])
+            return row
+    raise ModelError("t_from", f"= {t_from!r}: after the run's last output time")
+
+
 def _del(c: pd.DataFrame, m: float, n_ref: float) -> float:
     """(F1) of counted cycles ``c`` (:func:`rainflow_cycles`)."""
     if c.empty:
@@ -314,12 +388,16 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
       planet); ``del_tooth_flank_N`` likewise with the flank exponent;
     - ``del_planet_bearing_N``: the largest DEL of a planet bearing's radial force (bearing
       exponent);
+    - ``dels_exact``: True where these three DELs count the exact solution's turning points
+      (:func:`turning_dels`: they do not depend on the output step when ``t_skip`` is on its
+      grid), False where the run has none and they count the output rows;
     - ``l10_planet_bearing_h``: the shortest ISO 281 life (F3) of a planet bearing of dynamic
       rating ``bearing_C`` (N), its revolutions those of the planet on its pin
       (``planet_spin`` per rotor revolution: ``z_ring / z_planet`` for a carrier input);
       ``planet_bearing_revolutions`` and ``planet_bearing_peq_N`` of that bearing (what a
       lifetime sum needs);
-    - ``del_rotor_torque_Nm`` (exponent of the tooth root), ``mean_power_W``,
+    - ``del_rotor_torque_Nm`` (exponent of the tooth root, the turbine's rotor torque on its
+      aerodynamic step), ``mean_power_W``,
       ``max_front_force_N`` (the exact maximum of the solution,
       :meth:`~gearmodal.SimulationResult.peaks`, where the run has it and ``t_skip`` is on its
       peak bins), ``p99_tooth_force_N`` and ``p99_planet_bearing_force_N`` (99th
@@ -348,8 +426,14 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
             and math.isfinite(planet_spin)):
         raise ModelError("planet_spin", f"= {planet_spin!r}: planet revolutions on the pin "
                          "per rotor revolution, > 0")
+    # the DELs from the exact solution's turning points where the run has them (they do not
+    # depend on the output step), else from the rows
+    exact = turning_dels(sim, (ex["tooth_root"], ex["tooth_flank"]), flanks, t_skip, n_ref)
+    exact_b = turning_dels(sim, (ex["bearing"],), [f"{b}.radial" for b in bearings], t_skip,
+                           n_ref) if exact is not None else None
     # the run's forces a chunk of rows at a time (a stored run's row groups): the flank forces
-    # counted as they come (RainflowStream), the few signals the rest needs kept per row
+    # counted as they come (RainflowStream) where there are no turning points, the few signals
+    # the rest needs kept per row
     streams = {c: RainflowStream((ex["tooth_root"], ex["tooth_flank"])) for c in flanks}
     keep: dict[str, list] = {k: [] for k in ("t", "speed", "torque", "teeth", *bearings)}
     for f in sim.force_chunks([*flanks, *(f"{b}.{d}" for b in bearings for d in "xy")]):
@@ -363,8 +447,9 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
         keep["teeth"].append(f[flanks].max(axis=1).to_numpy())
         for b in bearings:
             keep[b].append(np.hypot(f[f"{b}.x"], f[f"{b}.y"]).to_numpy())
-        for c in flanks:
-            streams[c].feed(f[c].to_numpy())
+        if exact is None:
+            for c in flanks:
+                streams[c].feed(f[c].to_numpy())
     t = np.concatenate(keep["t"])
     index = pd.Index(t, name="time")
     speed = np.concatenate(keep["speed"])
@@ -376,17 +461,26 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
     life = {b: rating_life(radial[b], ratio * speed, bearing_C, ex["bearing"]) for b in bearings}
     short = min(life, key=lambda b: life[b]["l10_h"])
     revs = float(np.sum(_weights(t) * ratio * np.abs(speed) / 60.0))
+    if exact is not None and exact_b is not None:
+        dels = {"del_tooth_N": float(exact.iloc[:, 0].max()),
+                "del_tooth_flank_N": float(exact.iloc[:, 1].max()),
+                "del_planet_bearing_N": float(exact_b.iloc[:, 0].max())}
+    else:
+        dels = {"del_tooth_N": max(st.damage_equivalent_load(ex["tooth_root"], n_ref)
+                                   for st in streams.values()),
+                "del_tooth_flank_N": max(st.damage_equivalent_load(ex["tooth_flank"], n_ref)
+                                         for st in streams.values()),
+                "del_planet_bearing_N": max(damage_equivalent_load(r, ex["bearing"], n_ref)
+                                            for r in radial.values())}
+    # the rotor torque on the turbine's own (aerodynamic) step, not the gearbox's rows
+    rotor = tur["torque_Nm"][tur.index >= t_skip - 1e-9]
     row = {"duration_s": float(t[-1] - t[0]),
-           "del_tooth_N": max(st.damage_equivalent_load(ex["tooth_root"], n_ref)
-                              for st in streams.values()),
-           "del_tooth_flank_N": max(st.damage_equivalent_load(ex["tooth_flank"], n_ref)
-                                    for st in streams.values()),
-           "del_planet_bearing_N": max(damage_equivalent_load(r, ex["bearing"], n_ref)
-                                       for r in radial.values()),
+           **dels,
+           "dels_exact": exact is not None and exact_b is not None,
            "l10_planet_bearing_h": life[short]["l10_h"],
            "planet_bearing_peq_N": life[short]["equivalent_load_N"],
            "planet_bearing_revolutions": revs,
-           "del_rotor_torque_Nm": damage_equivalent_load(torque, ex["tooth_root"], n_ref),
+           "del_rotor_torque_Nm": damage_equivalent_load(rotor, ex["tooth_root"], n_ref),
            "max_front_force_N": float(sim.peaks(t_skip)["peak_force_N"][flanks].max()),
            "p99_tooth_force_N": float(np.percentile(teeth, 99.0)),
            "p99_planet_bearing_force_N": float(np.percentile(radial[worst], 99.0)),

@@ -257,6 +257,9 @@ def test_exact_solution_does_not_depend_on_the_output_step():
     # the exact peaks (found across the run's 450 kernel calls and its re-basings): the same
     # at both steps, and never below a sample
     pd.testing.assert_frame_equal(a.gearbox.peak_bins, b.gearbox.peak_bins, check_exact=True)
+    # and the exact turning points, so the DELs counted from them
+    pd.testing.assert_frame_equal(a.gearbox.turning_points, b.gearbox.turning_points,
+                                  check_exact=True)
     for sim in (a.gearbox, b.gearbox):
         pk = sim.peaks()
         flanks = [c for c in pk.index if c.endswith((".front", ".back"))]

@@ -5,6 +5,7 @@ output step, half of it and twice it."""
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from gearmodal.scene import load_scene
@@ -38,6 +39,11 @@ def test_shipped_scene_does_not_depend_on_the_output_step(path):
     q1, qh, q2 = (s.q.to_numpy() for s in sims)
     np.testing.assert_array_equal(qh[::2], q1)
     np.testing.assert_array_equal(q1[::2], q2)
+    # the exact turning points (what the DELs count) and peaks: the same to the bit
+    for sim in sims[1:]:
+        pd.testing.assert_frame_equal(sim.turning_points, sims[0].turning_points,
+                                      check_exact=True)
+        pd.testing.assert_frame_equal(sim.peak_bins, sims[0].peak_bins, check_exact=True)
 
 
 def test_every_shipped_scene_is_covered():

@@ -31,6 +31,7 @@ from .peaks import PEAK_BIN, peak_table
 from .record import ForceMap, Recorder, event_table
 from .result import ELEMENT_COLUMNS, SimulationResult, StoredTables
 from .system import PiecewiseLinearSystem
+from .turns import turn_table
 
 #: most output steps of a run (each a row of the result's tables)
 MAX_STEPS = 5e7
@@ -335,12 +336,15 @@ def build_result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings,
     system = seg_systems[0][2]
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
     tables = _Tables(seg_systems, t, X, S, event_array([events]), mesh_k)
-    bins = None
+    bins = turning = None
     if peaks is not None:
         bins = peak_table(peaks, system.asm.contacts.columns, float(t[-1]))
         settings = {**settings, "peak_bin": peaks.bin}
+        if bins is not None:  # the exact kernel throughout: its turning points too
+            peaks.turns.finish()
+            turning = turn_table(peaks.turns.channels, peaks.turns.rows())
     return SimulationResult(t=t, settings=settings, initial_state=init, stats=stats,
-                            tables=tables, peak_bins=bins,
+                            tables=tables, peak_bins=bins, turning_points=turning,
                             elements=functools.partial(elements_table, system.asm))
 
 
@@ -349,6 +353,8 @@ def stored_result(recorder: Recorder, system, s0, stats, settings, span,
     """The :class:`SimulationResult` of a run streamed to ``recorder``'s directory (closed
     here; its ``result.json`` and small tables written): its tables are read from there
     when first asked for. ``span``: the first and last output time, s."""
+    if peaks is not None and peaks.exact:
+        peaks.turns.finish(recorder)  # each channel's last value, to its table
     d = recorder.close()
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
     bins = None

@@ -199,6 +199,8 @@ class Driver:
         ev = event_rows(ev)
         ev[:, 0] += self.k * self.dt
         self._event(ev)
+        if self.peaks is not None:
+            self.peaks.turns.drain(self.sink)
         new = not self.segments or self.segments[-1][2] is not system
         if new:
             system.azimuth0 = azimuth0  # the stretch's start (its tables' azimuths)

@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ModelError
+from .turns import TurnPoints
 
 __all__ = ["PEAK_BIN", "PeakTracker", "peak_table"]
 
@@ -107,6 +108,8 @@ class PeakTracker:
         self.PN = np.zeros(nc + len(labels), dtype=np.int64)
         #: every piece so far went through the exact kernel (else the peaks are sampled)
         self.exact = True
+        #: the exact turning points of the same channels (:mod:`.turns`)
+        self.turns = TurnPoints(system, labels)
 
     def ensure(self, t_end: float) -> None:
         """Bins up to absolute time ``t_end`` (s)."""
@@ -141,6 +144,7 @@ class PeakTracker:
         the episode's ``(peak, time)`` if it opened (NaN otherwise), its new episode begun if
         it closed."""
         self.flush()
+        self.turns.switched(e)
         if closed:
             self.EP[e] = (force, t)
             return math.nan, math.nan

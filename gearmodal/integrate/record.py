@@ -16,6 +16,7 @@ import pandas as pd
 
 from ..result_io import TableWriter
 from .result import EVENT_COLUMNS
+from .turns import TURN_COLUMNS, turn_table
 
 #: rows of one stretch the recorder gathers before forming their forces (1 000 x 70 states:
 #: 0.6 MB)
@@ -137,6 +138,7 @@ class Recorder:
         self._n_pending = 0
         self._events: list = []  # event rows not yet made a table
         self._n_events_pending = 0
+        self._turns: TableWriter | None = None  # made with the first turning points
 
     def rows(self, k0: int, X: np.ndarray, S: np.ndarray, system, seg_k0: int,
              azimuths: np.ndarray | None) -> None:
@@ -188,6 +190,14 @@ class Recorder:
             if self._n_events_pending >= BATCH:
                 self._flush_events()
 
+    def turns(self, rows: np.ndarray, channels: list[str]) -> None:
+        """Exact turning points ((n, 3): time, channel index, value;
+        :class:`~.turns.TurnPoints`) to the table ``turning_points``."""
+        if self._turns is None:
+            self._turns = TableWriter(self.directory, "turning_points", list(TURN_COLUMNS),
+                                      dtype=None)
+        self._turns.append_frame(turn_table(channels, rows))
+
     def _flush_events(self) -> None:
         if self._events:
             ev = np.concatenate(self._events)
@@ -200,4 +210,6 @@ class Recorder:
         self._flush_events()
         for w in self.writers.values():
             w.close()
+        if self._turns is not None:
+            self._turns.close()
         return self.directory

@@ -126,6 +126,14 @@ class SimulationResult:
         bin of ``settings["peak_bin"]`` s, located on the pieces' series, never a sampled
         value (long format: ``bin_start_s``, ``channel``, ``peak_force_N``, ``time_s``);
         ``None`` for other methods. Read it with :meth:`peaks`.
+    turning_points : the exact turning points (exact method, Taylor propagator) of the same
+        channels (:mod:`gearmodal.integrate.turns`): every local extremum of the solution's
+        force, located on the pieces' series, and the values on both sides of a jump (a
+        contact switching); index ``time`` (s), columns ``channel`` and ``force_N``, each
+        channel's rows in time order, its first the run's start and its last the run's end.
+        What a rainflow count reads (:func:`gearmodal.fatigue.turning_cycles`): it does not
+        depend on the output step. ``None`` for other methods. A stored run reads it when
+        first asked for; :meth:`turning_chunks` goes through it a row group at a time.
     constraint_residual : coupled systems only: the exact residual ``g`` of every constraint
         row along the trajectory (m or rad; rounding for linear constraints, second order for
         linearised joints).
@@ -156,6 +164,7 @@ class SimulationResult:
     constraint_residual: pd.DataFrame | None = None
     elements: pd.DataFrame | None = None
     peak_bins: pd.DataFrame | None = None
+    turning_points: pd.DataFrame | None = None
     #: ``tables(name) -> DataFrame`` builds the tables not given (see the class docstring)
     tables: object = field(default=None, repr=False, compare=False)
     #: the directory a streamed or loaded run's tables are read from (None: in memory)
@@ -265,6 +274,18 @@ class SimulationResult:
             yield from table_chunks(self.stored, "forces", columns)
         else:
             yield self.forces if columns is None else self.forces[columns]
+
+    def turning_chunks(self):
+        """The turning points (:attr:`turning_points`) in chunks of rows: a stored run's row
+        groups (constant memory), else the whole table; nothing without them."""
+        if self.stored is not None and self.__dict__.get("_turning_points") is None:
+            try:
+                table_path(self.stored, "turning_points")
+            except ModelError:
+                return
+            yield from table_chunks(self.stored, "turning_points")
+        elif self.turning_points is not None:
+            yield self.turning_points
 
     # -- structure -----------------------------------------------------------------------
     def meshes(self, role: str | None = None) -> list[str]:
@@ -607,6 +628,18 @@ class SimulationResult:
             remove_table(d / f"{name}.{'csv' if format == 'parquet' else 'parquet'}")
         if self.peak_bins is not None:
             write_table(self.peak_bins, d, "peak_bins", format, index_label=None)
+        src = None
+        if self.stored is not None and self.__dict__.get("_turning_points") is None:
+            try:
+                src = table_path(self.stored, "turning_points")
+            except ModelError:
+                src = None
+        if src is not None and src.suffix == f".{format}":
+            if not same:
+                copy_table(src, d)
+        elif self.turning_points is not None:
+            write_table(self.turning_points, d, "turning_points", format)
+        remove_table(d / f"turning_points.{'csv' if format == 'parquet' else 'parquet'}")
         if self.elements is not None:
             write_table(self.elements, d, "elements", format, index_label="element")
         if self.constraint_forces is not None:
@@ -702,3 +735,28 @@ def _elements_property() -> property:
 
 
 SimulationResult.elements = _elements_property()
+
+
+def _turning_property() -> property:
+    """:attr:`SimulationResult.turning_points`: a stored run's table is read when first asked
+    for (a long run's points need not be held by a pass that streams them)."""
+
+    def get(self):
+        val = self.__dict__.get("_turning_points")
+        if val is None and self.__dict__.get("stored") is not None \
+                and not self.__dict__.get("_turning_read"):
+            self.__dict__["_turning_read"] = True
+            if any((Path(self.stored) / f"turning_points.{ext}").exists()
+                   for ext in ("parquet", "csv")):
+                val = read_table(self.stored, "turning_points", dtype={"channel": str})
+                self.__dict__["_turning_points"] = val
+        return val
+
+    def set_(self, val):
+        self.__dict__["_turning_points"] = val
+
+    return property(get, set_, doc="The exact turning points of the force channels (time, "
+                    "channel, force_N), or None (see the class docstring).")
+
+
+SimulationResult.turning_points = _turning_property()

@@ -963,6 +963,223 @@ def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
                      stk, counts)
 
 
+# -- exact turning points (DESIGN 3.2; issue 34 item 3: fatigue from the exact solution) ---------
+#: a piece over which a channel moves by less than this fraction of its size is flat: its
+#: derivative's roots would be rounding, not turning points
+FLAT = 1e-14
+
+
+@numba.njit(cache=True)
+def poly_turns(c, n, te, taus, d, e, wflat, stk):
+    """The interior extrema of ``p(tau) = sum_(k < n) c_k tau^k`` on ``(0, te)``, in order,
+    into ``taus``; returns their number. None where ``p'(0)`` dominates the rest of ``p'``
+    (monotone) or the piece is flat to rounding (:data:`FLAT`). Else the Bernstein
+    coefficients of ``p'`` on ``[0, te]`` decide (Descartes' rule for the Bernstein basis):
+    no sign change, no extremum; one, exactly one, located by Newton's method and bisection
+    (:func:`_refine`); more, every crossing of ``p'`` (a minimum) or ``-p'`` (a maximum) by
+    :func:`first_root` (Bernstein subdivision: none missed, located to rounding) on ``p'``
+    shifted to what is left of the interval, the searches alternating so that each starts
+    where its function is not positive (as :func:`poly_max`). ``d``, ``e`` (n), ``wflat``
+    ((DEPTH + 5) n), ``stk``: scratch."""
+    if n < 3 or te <= 0.0:
+        return 0
+    size = abs(c[0])
+    var = 0.0
+    rest = 0.0
+    sc = 1.0
+    for k in range(1, n):
+        if k >= 2:
+            rest += k * abs(c[k]) * sc  # sc = te^(k - 1)
+        sc *= te
+        var += abs(c[k]) * sc
+    if var <= FLAT * (size + var) or abs(c[1]) > rest:
+        return 0
+    m = n - 1
+    for k in range(m):
+        d[k] = (k + 1.0) * c[k + 1]
+    _shift(d, m, 0.0, te, e)  # p' on [0, te] as a polynomial on [0, 1]
+    _bernstein(e[:m], e[:m])
+    changes = 0
+    prev = 0.0
+    for k in range(m):
+        if e[k] != 0.0:
+            if prev != 0.0 and (e[k] > 0.0) != (prev > 0.0):
+                changes += 1
+            prev = e[k]
+    if changes == 0:
+        return 0
+    if changes == 1 and e[0] != 0.0 and e[m - 1] != 0.0:
+        _shift(d, m, 0.0, te, e)
+        sign = 1.0 if e[0] < 0.0 else -1.0  # g = sign p' rises through 0 once
+        for k in range(m):
+            e[k] *= sign
+        r = _refine(e[:m], 0.0, 1.0, _hpoly(e[:m], 0.0), _hpoly(e[:m], 1.0))
+        if r >= 1.0:
+            return 0
+        taus[0] = te * r
+        return 1
+    work = wflat[:(DEPTH + 5) * m].reshape((DEPTH + 5, m))
+    lo = 0.0
+    sign = 1.0 if _hpoly(d[:m], 0.0) < 0.0 else -1.0
+    cnt = 0
+    for _ in range(2 * m + 2):  # p' has at most m - 1 roots
+        w = te - lo
+        if w <= 0.0:
+            break
+        _shift(d, m, lo, w, e)
+        for k in range(m):
+            e[k] *= sign
+        r = first_root(e[:m], work, stk)
+        if r == np.inf:
+            break
+        tau = lo + w * r
+        if tau >= te:
+            break  # at the piece's end: its end value, not an interior extremum
+        taus[cnt] = tau
+        cnt += 1
+        lo = tau
+        sign = -sign
+    return cnt
+
+
+@numba.njit(cache=True, inline="always")
+def _feed(ch, t, v, TS, TP, ntp):
+    """The next value ``v`` at time ``t`` of turning channel ``ch``: ``TS[ch]`` holds its last
+    point (time, value), direction (+-1, 0: none yet), whether it has one and a jump flag; the
+    last point is written to ``TP`` (time, channel, value) once the direction changes there
+    (a turning point), the channel's first point at once. A plateau counts once. Returns the
+    rows of ``TP`` used."""
+    if TS[ch, 3] == 0.0:
+        TS[ch, 0] = t
+        TS[ch, 1] = v
+        TS[ch, 2] = 0.0
+        TS[ch, 3] = 1.0
+        TP[ntp, 0] = t
+        TP[ntp, 1] = ch
+        TP[ntp, 2] = v
+        return ntp + 1
+    pv = TS[ch, 1]
+    if v == pv:
+        return ntp
+    dv = 1.0 if v > pv else -1.0
+    if TS[ch, 2] != 0.0 and dv != TS[ch, 2]:
+        TP[ntp, 0] = TS[ch, 0]
+        TP[ntp, 1] = ch
+        TP[ntp, 2] = pv
+        ntp += 1
+    TS[ch, 0] = t
+    TS[ch, 1] = v
+    TS[ch, 2] = dv
+    return ntp
+
+
+@numba.njit(cache=True)
+def _piece_turns(ch, P, m, t_abs, h, te, jump, root, TS, TP, ntp, taus, d, e, wflat, stk):
+    """Channel ``ch`` over one piece (``P``: its series of ``m`` terms, a radial channel's
+    square with ``root``): its start value where the channel jumped there, its interior
+    extrema (:func:`poly_turns`) and its end value, through :func:`_feed`."""
+    if jump:
+        v = P[0]
+        ntp = _feed(ch, t_abs, math.sqrt(max(v, 0.0)) if root else v, TS, TP, ntp)
+    # the last terms, together below rounding of the piece's size, left out of the search
+    size = 0.0
+    sc = 1.0
+    for k in range(m):
+        size += abs(P[k]) * sc
+        sc *= te
+    ms = m
+    tail = 0.0
+    sc = te ** (m - 1)
+    while ms > 2 and tail + abs(P[ms - 1]) * sc <= 1e-17 * size:
+        tail += abs(P[ms - 1]) * sc
+        ms -= 1
+        sc = sc / te if te > 0.0 else 0.0
+    cnt = poly_turns(P, ms, te, taus, d, e, wflat, stk)
+    for i in range(cnt):
+        v = _hpoly(P[:m], taus[i])
+        ntp = _feed(ch, t_abs + taus[i] * h, math.sqrt(max(v, 0.0)) if root else v, TS, TP,
+                    ntp)
+    v = _hpoly(P[:m], te)
+    return _feed(ch, t_abs + te * h, math.sqrt(max(v, 0.0)) if root else v, TS, TP, ntp)
+
+
+@numba.njit(cache=True)
+def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx, FT, sptr,
+                 sidx, sval, sk, sc, chp, TCH, TCW, TS, jumped, TP, ntp, fx, fy, P, tmp, taus,
+                 d, ee, wflat, stk):
+    """The turning points over the piece ``Bv`` (from absolute time ``t_abs``, length ``h``, up
+    to ``te`` of it) of every turning channel: the contact channels ``TCH`` (up to two
+    contacts each, weights ``TCW``: a force column of one contact or a dead band's two sides;
+    0 while open; a contact ``jumped`` at the piece's start: switched or its stiffness
+    changed) and then the spring channels ``chp`` (a bearing's radial force, as
+    :func:`_track_peaks`). Returns the rows of ``TP`` used (room for every point of the piece
+    is the caller's)."""
+    nct = TCH.shape[0]
+    t1 = t_abs + te * h
+    for ch in range(nct):
+        closed = False
+        jump = TS[ch, 4] != 0.0 or TS[ch, 3] == 0.0
+        for j in range(2):
+            e = TCH[ch, j]
+            if e >= 0:
+                if s[e]:
+                    closed = True
+                if jumped[e]:
+                    jump = True
+        TS[ch, 4] = 0.0
+        if not closed:
+            if jump:
+                ntp = _feed(ch, t_abs, 0.0, TS, TP, ntp)
+            ntp = _feed(ch, t1, 0.0, TS, TP, ntp)
+            continue
+        for k in range(nt):
+            P[k] = 0.0
+        for j in range(2):
+            e = TCH[ch, j]
+            if e < 0 or not s[e]:
+                continue
+            et = -1
+            for jj in range(tc_idx.shape[0]):
+                if tc_idx[jj] == e:
+                    et = jj
+            if et < 0:
+                _row_series(Bv, nt, h, wptr, widx, wval, e, kc[e], cc[e], off[e], fx, tmp)
+            else:  # a turning contact: its force series (T2)
+                for k in range(nt):
+                    fx[k] = FT[et, k]
+            for k in range(nt):
+                P[k] += TCW[ch, j] * fx[k]
+        ntp = _piece_turns(ch, P, nt, t_abs, h, te, jump, False, TS, TP, ntp, taus, d, ee,
+                           wflat, stk)
+    for r in range(chp.shape[0]):
+        ch = nct + r
+        jump = TS[ch, 4] != 0.0 or TS[ch, 3] == 0.0
+        TS[ch, 4] = 0.0
+        two = chp[r, 1] >= 0
+        _row_series(Bv, nt, h, sptr, sidx, sval, chp[r, 0], sk[chp[r, 0]], sc[chp[r, 0]], 0.0,
+                    fx, tmp)
+        if two:
+            _row_series(Bv, nt, h, sptr, sidx, sval, chp[r, 1], sk[chp[r, 1]],
+                        sc[chp[r, 1]], 0.0, fy, tmp)
+        m2 = 2 * nt - 1
+        size = 0.0
+        for j in range(m2):
+            a = 0.0
+            for i in range(max(0, j - nt + 1), min(j, nt - 1) + 1):
+                a += fx[i] * fx[j - i]
+                if two:
+                    a += fy[i] * fy[j - i]
+            P[j] = a
+            size += abs(a)
+        tail = 0.0  # the square's last terms below rounding of its size (as _track_peaks)
+        while m2 > 2 and tail + abs(P[m2 - 1]) <= 1e-17 * size:
+            tail += abs(P[m2 - 1])
+            m2 -= 1
+        ntp = _piece_turns(ch, P, m2, t_abs, h, te, jump, True, TS, TP, ntp, taus, d, ee,
+                           wflat, stk)
+    return ntp
+
+
 #: force samples within this fraction of their size from the line through a stretch's first
 #: two are on it (the rounding of loads computed on a line, not a kink)
 LINE_TOL = 1e-12
@@ -1024,7 +1241,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT,
                reach, per_state, Ksym, Wl, km, c0, kappa, rho_keys, rho_vals, TL, FL, MinvUL,
                GTL, HX, HNU, track, EP, PB, pbin, PC, PM, PN, t_call, sptr, sidx, sval, sk,
-               sc, chp):
+               sc, chp, TCH, TCW, TS, TP, ntp):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -1070,6 +1287,12 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     of ``pbin`` s and each contact's open episode ``EP`` (contacts, 2); times are absolute
     (``t_call``: this call's start). ``EV`` rows have 8 columns: the six above, then on a row
     that opens a contact the peak force of the episode it ends and its time (else NaN).
+
+    Exact turning points (with ``track``; :class:`~gearmodal.integrate.turns.TurnPoints`): of
+    the contact channels ``TCH``/``TCW`` and the spring channels ``chp``
+    (:func:`_track_turns`), each channel's state in ``TS``, appended to ``TP`` (time, channel,
+    value) from row ``ntp``; the call returns ``(status, k, n_ev, contact, EV, TP, ntp)``
+    (``TP`` a larger array than the one passed if it ran full).
     """
     N = x.shape[0]
     n = N // 2
@@ -1168,6 +1391,11 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     pd_ = np.zeros(2 * n_terms)
     pe_ = np.zeros(2 * n_terms)
     pwork = np.empty((DEPTH + 5) * 2 * n_terms)
+    # exact turning points: the contacts that jumped at the current piece's start, scratch
+    jumped = np.zeros(nc, dtype=np.bool_)
+    taus = np.empty(2 * n_terms)
+    n_turn = TCH.shape[0] + chp.shape[0]
+    turn_room = n_turn * (2 * n_terms + 2)  # the most points one piece can add
     _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
     toggled = 0
     dense = False
@@ -1227,6 +1455,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     kc[e] = sched_k[ip]
                     _toggle(U, W, kc, cc, off, e, 1.0, MKC, acc)
                     toggled += 2
+                    jumped[e] = True  # its force steps with the stiffness
                 else:
                     kc[e] = sched_k[ip]
                 ip += 1
@@ -1446,6 +1675,15 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                                  tc_idx, FT, sptr, sidx, sval, sk, sc, chp, EP, PB, pbin, PC,
                                  PM, PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk,
                                  counts)
+                    if ntp + turn_room > TP.shape[0]:
+                        grownT = np.empty((2 * TP.shape[0] + turn_room, 3))
+                        grownT[:ntp] = TP[:ntp]
+                        TP = grownT
+                    ntp = _track_turns(Bv, nt, h, t_call + t, 1.0, s, kc, cc, off, wptr, widx,
+                                       wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH,
+                                       TCW, TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_,
+                                       pe_, pwork, stk)
+                    jumped[:] = False
                 t_old = t
                 t = t_end if h == remaining else t + h
                 if ip < n_sched and sched_t[ip] - t < simultaneous:
@@ -1482,6 +1720,15 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 _track_peaks(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx, wval,
                              tc_idx, FT, sptr, sidx, sval, sk, sc, chp, EP, PB, pbin, PC, PM,
                              PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk, counts)
+                if ntp + turn_room > TP.shape[0]:
+                    grownT = np.empty((2 * TP.shape[0] + turn_room, 3))
+                    grownT[:ntp] = TP[:ntp]
+                    TP = grownT
+                ntp = _track_turns(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx,
+                                   wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH, TCW,
+                                   TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_, pe_,
+                                   pwork, stk)
+                jumped[:] = False
             while jn <= k2 and jn * dt < t_ev - 1e-13 * dt:  # outputs before the event
                 _evaluate(Bv, (jn * dt - t) / h, h, qo, vo)
                 _write(X, S, jn, qo, vo, s)
@@ -1540,6 +1787,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     last = e
                     _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKC, acc)
                     toggled += 1
+                    jumped[e] = True
             if per_state:
                 # a state met before: its bound from the table; a new one runs on the bound
                 # over every state until one of its pieces ends without an event (most states
@@ -1557,7 +1805,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 x[:n] = q
                 x[n:] = v
                 sched_pos[0] = ip
-                return 2, jn - 1, n_ev, last, EV
+                return 2, jn - 1, n_ev, last, EV, TP, ntp
             if toggled >= REFRESH:  # rounding of the updates, rebuilt from scratch
                 _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
                 toggled = 0
@@ -1576,7 +1824,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     x[:n] = q
     x[n:] = v
     sched_pos[0] = ip
-    return 0, k, n_ev, -1, EV
+    return 0, k, n_ev, -1, EV, TP, ntp
 
 
 def radius_bound(k: float, c: float) -> float:
@@ -1847,12 +2095,14 @@ class TaylorIntegrator:
                      np.zeros((nc, 1)), np.full((nc, 5), -np.inf), np.zeros(nc, dtype=np.int64))
             rows = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0),
                     np.zeros(0), np.zeros(0), np.zeros((0, 2), dtype=np.int64))
+            turns = (np.zeros((0, 2), dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 5)),
+                     np.empty((1, 3)), 0)
         else:
             if 2 * self.n_terms - 1 > peaks.PC.shape[1]:  # (numba does not check bounds)
                 raise ValueError(f"{self.n_terms} terms: the peak tracker holds pieces of at "
                                  f"most {(peaks.PC.shape[1] + 1) // 2}")
             peaks.ensure(t0 + n_steps * self.dt)
-            track, rows = peaks.args(), peaks.rows()
+            track, rows, turns = peaks.args(), peaks.rows(), peaks.turns.args()
         k, n_ev = 0, 0
         counts = np.zeros(7, dtype=np.int64)
         met = int((self.state_bound.keys >= 0).sum())  # states bounded before this run
@@ -1860,12 +2110,15 @@ class TaylorIntegrator:
         # of the bound over every state, at most the call's span (a system with no stiffness
         # has rho = 0: its time scale is unbounded)
         tie = SIMULTANEOUS * min(self.h_max, n_steps * self.dt)
-        status, k, n_ev, contact, EV = taylor_run(
+        status, k, n_ev, contact, EV, TP, ntp = taylor_run(
             self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
             sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
             self.terms, self.tscale, GRAZE_MARGIN, tie, self.max_events, X, S, EV, n_ev,
             counts, *sched, sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
-            *self.state_bound.args(), TL, FL, MinvUL, GTL, HX, HNU, *track, float(t0), *rows)
+            *self.state_bound.args(), TL, FL, MinvUL, GTL, HX, HNU, *track, float(t0), *rows,
+            *turns)
+        if peaks is not None:
+            peaks.turns.update(TP, ntp)
         if status != 0:
             raise ModelError(
                 "max_events_per_step",
