@@ -54,9 +54,20 @@ def test_damage_equivalent_loads_of_a_run_and_bad_input():
     loads = gm.balance(stage, {"carrier.torque": 2e3}, on="sun.torque")
     sim = gm.simulate(stage, 0.02, dt=1e-4, loads=loads, speed_rpm=300.0)
     d = sim.damage_equivalent_loads()
-    assert set(d.kind) == {"tooth_root", "tooth_flank", "bearing"}
+    assert set(d.kind) == {"tooth_root", "tooth_flank", "bearing"} and d.exact.all()
+    # the exact count is the flank's turning points' (its first row the run's start)
     row = d[(d.load == "sun_planet1.front") & (d.kind == "tooth_root")].iloc[0]
-    assert row.del_N == pytest.approx(
+    tp = sim.turning_points
+    seq = tp.force_N[tp.channel == "sun_planet1.front"]
+    assert seq.index[0] == 0.0 and seq.iloc[0] == sim.forces["sun_planet1.front"].iloc[0]
+    assert row.del_N == pytest.approx(fatigue.damage_equivalent_load(seq, 8.7), rel=1e-12)
+    # without turning points the rows are counted, and say so
+    rows = gm.simulate(stage, 0.02, dt=1e-4, loads=loads, speed_rpm=300.0,
+                       turning_points=False)
+    assert rows.turning_points is None
+    dr = rows.damage_equivalent_loads()
+    row = dr[(dr.load == "sun_planet1.front") & (dr.kind == "tooth_root")].iloc[0]
+    assert not dr.exact.any() and row.del_N == pytest.approx(
         fatigue.damage_equivalent_load(sim.forces["sun_planet1.front"], 8.7), rel=1e-12)
     with pytest.raises(gm.ModelError, match="m"):
         fatigue.damage_equivalent_load([0.0, 1.0, 0.0], 0.5)

@@ -154,10 +154,12 @@ class Driver:
         none tracked.
     sink : a :class:`~.record.Recorder` the output rows and events go to as the run goes
         (then the driver keeps none of them: :meth:`arrays` has no rows); ``None``: kept.
+    turning_points : also the exact turning points (:mod:`.turns`; with ``peak_bin``).
     """
 
     def __init__(self, name: str, dt: float, x0: np.ndarray, s0: np.ndarray,
-                 peak_bin: float | None = PEAK_BIN, sink=None, **options):
+                 peak_bin: float | None = PEAK_BIN, sink=None, turning_points: bool = True,
+                 **options):
         self.method = get_method(name, options)
         self.options = options
         self.dt = float(dt)
@@ -170,6 +172,7 @@ class Driver:
         self._store = None  # (X, S) of reserve(): the output rows written in place
         self.stats: dict = {}
         self.peak_bin = peak_bin
+        self.turning_points = bool(turning_points)
         self.peaks: PeakTracker | None = None  # made with the first system
         self.sink = sink
         self.n_events = 0
@@ -192,7 +195,7 @@ class Driver:
         at each of the ``n_steps + 1`` times, for the sink's force rows (alternating
         meshes)."""
         if self.peaks is None and self.peak_bin is not None:
-            self.peaks = PeakTracker(system, self.peak_bin)
+            self.peaks = PeakTracker(system, self.peak_bin, turns=self.turning_points)
         X, S, ev, st = self.method.run(system, self.dt, n_steps, F, self.x, self.s,
                                        azimuth0=azimuth0, loads=loads, peaks=self.peaks,
                                        t0=self.k * self.dt, **self.options)

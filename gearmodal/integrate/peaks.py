@@ -68,9 +68,10 @@ class PeakTracker:
     system : the run's (first) :class:`~gearmodal.integrate.system.PiecewiseLinearSystem`
         (its contacts and springs; re-based systems of the same model share them).
     bin_s : width of the peak bins, s (> 0).
+    turns : also the exact turning points of the same channels (:mod:`.turns`).
     """
 
-    def __init__(self, system, bin_s: float = PEAK_BIN):
+    def __init__(self, system, bin_s: float = PEAK_BIN, turns: bool = True):
         if not (isinstance(bin_s, (int, float)) and math.isfinite(bin_s) and bin_s > 0):
             raise ModelError("peak_bin", f"= {bin_s!r}: must be a finite number > 0 s")
         self.bin = float(bin_s)
@@ -109,7 +110,7 @@ class PeakTracker:
         #: every piece so far went through the exact kernel (else the peaks are sampled)
         self.exact = True
         #: the exact turning points of the same channels (:mod:`.turns`)
-        self.turns = TurnPoints(system, labels)
+        self.turns = TurnPoints(system, labels, enabled=turns)
 
     def ensure(self, t_end: float) -> None:
         """Bins up to absolute time ``t_end`` (s)."""

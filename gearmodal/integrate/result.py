@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ModelError
-from ..fatigue import N_REF, WOEHLER, damage_equivalent_load
+from ..fatigue import N_REF, WOEHLER, damage_equivalent_load, turning_dels
 from ..result_io import (
     VIEW_ROWS,
     copy_table,
@@ -520,28 +520,46 @@ class SimulationResult:
         out.insert(2, "t_end", edges[out["window"].to_numpy() + 1])
         return out
 
-    def damage_equivalent_loads(self, n_ref: float = N_REF,
-                                woehler: dict | None = None) -> pd.DataFrame:
+    def damage_equivalent_loads(self, n_ref: float = N_REF, woehler: dict | None = None,
+                                t_from: float = 0.0) -> pd.DataFrame:
         """Damage-equivalent loads (:mod:`gearmodal.fatigue`, (F1)) of every flank force
         (``<mesh>.front``/``.back``, with the tooth-root and the tooth-flank exponents) and
-        every planet bearing's radial force (``<bearing>.radial``, the bearing exponent),
-        one row each: ``load``, ``kind``, ``m``, ``del_N`` at ``n_ref`` cycles. ``woehler``
-        overrides :data:`gearmodal.fatigue.WOEHLER`."""
+        every planet bearing's radial force (``<bearing>.radial``, the bearing exponent) from
+        ``t_from`` (s) on, one row each: ``load``, ``kind``, ``m``, ``del_N`` at ``n_ref``
+        cycles and ``exact``: True where the count is of the exact solution's turning points
+        (:attr:`turning_points`, :func:`gearmodal.fatigue.turning_dels`: independent of the
+        output step), False where the run has none and the output rows are counted.
+        ``woehler`` overrides :data:`gearmodal.fatigue.WOEHLER`."""
         ex = {**WOEHLER, **(woehler or {})}
-        f = self.forces
+        flanks = [f"{m}.{side}" for m in self.meshes() for side in ("front", "back")]
+        columns = set(self.force_columns())
+        bearings = [b for b in self.elements_of("planet_bearing")
+                    if f"{b}.x" in columns and f"{b}.y" in columns]
+        kinds = ("tooth_root", "tooth_flank")
+        exact = turning_dels(self, [ex[k] for k in kinds], flanks, t_from, n_ref) \
+            if flanks else None
+        exact_b = turning_dels(self, [ex["bearing"]], [f"{b}.radial" for b in bearings],
+                               t_from, n_ref) if bearings else None
         rows = []
-        for m in self.meshes():
-            for side in ("front", "back"):
-                col = f"{m}.{side}"
-                for kind in ("tooth_root", "tooth_flank"):
+        f = None
+        if exact is None or (bearings and exact_b is None):
+            f = self.forces[self.forces.index >= t_from - 1e-12]
+        for col in flanks:
+            for j, kind in enumerate(kinds):
+                if exact is not None:
+                    rows.append((col, kind, ex[kind], float(exact.loc[col].iloc[j]), True))
+                else:
                     rows.append((col, kind, ex[kind],
-                                 damage_equivalent_load(f[col], ex[kind], n_ref)))
-        for b in self.elements_of("planet_bearing"):
-            if f"{b}.x" in f.columns and f"{b}.y" in f.columns:
+                                 damage_equivalent_load(f[col], ex[kind], n_ref), False))
+        for b in bearings:
+            if exact_b is not None:
+                rows.append((f"{b}.radial", "bearing", ex["bearing"],
+                             float(exact_b.loc[f"{b}.radial"].iloc[0]), True))
+            else:
                 radial = np.hypot(f[f"{b}.x"], f[f"{b}.y"])
                 rows.append((f"{b}.radial", "bearing", ex["bearing"],
-                             damage_equivalent_load(radial, ex["bearing"], n_ref)))
-        return pd.DataFrame(rows, columns=["load", "kind", "m", "del_N"])
+                             damage_equivalent_load(radial, ex["bearing"], n_ref), False))
+        return pd.DataFrame(rows, columns=["load", "kind", "m", "del_N", "exact"])
 
     def to_frame(self) -> pd.DataFrame:
         """Displacements and contact forces side by side, indexed by time."""

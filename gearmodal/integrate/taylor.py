@@ -1151,7 +1151,7 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
                 P[k] += TCW[ch, j] * fx[k]
         ntp = _piece_turns(ch, P, nt, t_abs, h, te, jump, False, TS, TP, ntp, taus, d, ee,
                            wflat, stk)
-    for r in range(chp.shape[0]):
+    for r in range(TS.shape[0] - nct):  # (none when the turning points are off)
         ch = nct + r
         jump = TS[ch, 4] != 0.0 or TS[ch, 3] == 0.0
         TS[ch, 4] = 0.0
@@ -1394,7 +1394,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     # exact turning points: the contacts that jumped at the current piece's start, scratch
     jumped = np.zeros(nc, dtype=np.bool_)
     taus = np.empty(2 * n_terms)
-    n_turn = TCH.shape[0] + chp.shape[0]
+    n_turn = TS.shape[0]  # channels: the contact channels, then the spring channels
     turn_room = n_turn * (2 * n_terms + 2)  # the most points one piece can add
     _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
     toggled = 0
@@ -1675,6 +1675,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                                  tc_idx, FT, sptr, sidx, sval, sk, sc, chp, EP, PB, pbin, PC,
                                  PM, PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk,
                                  counts)
+                if track and n_turn:
                     if ntp + turn_room > TP.shape[0]:
                         grownT = np.empty((2 * TP.shape[0] + turn_room, 3))
                         grownT[:ntp] = TP[:ntp]
@@ -1720,6 +1721,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 _track_peaks(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx, wval,
                              tc_idx, FT, sptr, sidx, sval, sk, sc, chp, EP, PB, pbin, PC, PM,
                              PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk, counts)
+            if track and n_turn:
                 if ntp + turn_room > TP.shape[0]:
                     grownT = np.empty((2 * TP.shape[0] + turn_room, 3))
                     grownT[:ntp] = TP[:ntp]

@@ -69,10 +69,15 @@ class TurnPoints:
     system : the run's first :class:`~gearmodal.integrate.system.PiecewiseLinearSystem`.
     radial : the labels of the spring channels the kernel tracks (the peak tracker's
         ``channels``, in its ``chp`` order).
+    enabled : False: no channel (the kernel skips the work; the run has no turning points).
     """
 
-    def __init__(self, system, radial: list[str]):
+    def __init__(self, system, radial: list[str], enabled: bool = True):
         labels, self.TCH, self.TCW = contact_channels(system.asm.contacts.columns)
+        if not enabled:
+            labels, radial = [], []
+            self.TCH, self.TCW = self.TCH[:0], self.TCW[:0]
+        self.enabled = bool(enabled)
         self.channels = labels + list(radial)
         # per channel: last point's time and value, direction, has one, jump flag
         self.TS = np.zeros((len(self.channels), 5))
