@@ -139,6 +139,9 @@ class Recorder:
         self._events: list = []  # event rows not yet made a table
         self._n_events_pending = 0
         self._turns: TableWriter | None = None  # made with the first turning points
+        self._turn_rows: list = []  # turning points not yet made a table
+        self._n_turns_pending = 0
+        self._channels: list[str] = []
 
     def rows(self, k0: int, X: np.ndarray, S: np.ndarray, system, seg_k0: int,
              azimuths: np.ndarray | None) -> None:
@@ -192,11 +195,22 @@ class Recorder:
 
     def turns(self, rows: np.ndarray, channels: list[str]) -> None:
         """Exact turning points ((n, 3): time, channel index, value;
-        :class:`~.turns.TurnPoints`) to the table ``turning_points``."""
+        :class:`~.turns.TurnPoints`) to the table ``turning_points``, made a table a batch
+        at a time (as the events)."""
         if self._turns is None:
             self._turns = TableWriter(self.directory, "turning_points", list(TURN_COLUMNS),
                                       dtype=None)
-        self._turns.append_frame(turn_table(channels, rows))
+        self._channels = channels
+        self._turn_rows.append(np.array(rows, dtype=float))
+        self._n_turns_pending += len(rows)
+        if self._n_turns_pending >= BATCH:
+            self._flush_turns()
+
+    def _flush_turns(self) -> None:
+        if self._turn_rows:
+            rows = np.concatenate(self._turn_rows)
+            self._turn_rows, self._n_turns_pending = [], 0
+            self._turns.append_frame(turn_table(self._channels, rows))
 
     def _flush_events(self) -> None:
         if self._events:
@@ -211,5 +225,6 @@ class Recorder:
         for w in self.writers.values():
             w.close()
         if self._turns is not None:
+            self._flush_turns()
             self._turns.close()
         return self.directory
