@@ -15,8 +15,11 @@ table read a decimated view (:func:`decimated`) that keeps every bucket's extrem
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
 import shutil
+import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -49,6 +52,67 @@ _PARQUET = {"compression": "zstd", "write_page_checksum": True}
 #: readers verify every page's CRC: a damaged file is refused naming it, never read as data
 #: (256 garbage bytes in a stored forces table changed 33 values silently)
 _VERIFY = {"page_checksum_verification": True}
+
+
+#: bytes read at a time for a checksum (a long table is never read whole)
+DIGEST_BLOCK = 8 * 2**20
+
+
+def sha256_of(path) -> str:
+    """The SHA-256 of a file, or of a folder of Parquet parts (its parts' bytes in order)."""
+    h = hashlib.sha256()
+    p = Path(path)
+    for f in (parquet_parts(p) if p.is_dir() else [p]):
+        with open(f, "rb") as fh:
+            while block := fh.read(DIGEST_BLOCK):
+                h.update(block)
+    return h.hexdigest()
+
+
+def digests(directory, names: list[str]) -> dict[str, str]:
+    """``{file name: SHA-256}`` of the files (a table's file or folder) of ``directory`` among
+    ``names``, those that exist."""
+    d = Path(directory)
+    return {n: sha256_of(d / n) for n in names if (d / n).exists()}
+
+
+def verify_digests(directory, sums: dict[str, str]) -> None:
+    """Every file of ``sums`` (:func:`digests`) present in ``directory`` with its SHA-256; a
+    missing, changed or damaged one is a :class:`ModelError` naming it."""
+    d = Path(directory)
+    for name, want in sums.items():
+        p = d / name
+        if not p.exists():
+            raise ModelError("directory", f"= {str(d)!r}: {name} is missing (it was saved)")
+        if sha256_of(p) != want:
+            raise ModelError("directory", f"= {str(d)!r}: {name} was damaged or changed "
+                             "after it was saved (its SHA-256 differs from the saved one): "
+                             "restore it or run again")
+
+
+@contextmanager
+def replacing(directory, markers: tuple[str, ...] = (HEADER,)):
+    """The directory a result is written to: ``directory`` itself, unless it holds a saved
+    result already (one of ``markers``), which then stays readable until the new one is
+    complete: the new one is written beside it and swapped in by two renames (a save that
+    fails half-way, a full disk, leaves the earlier result as it was)."""
+    d = Path(directory)
+    if not (d.is_dir() and any((d / m).exists() for m in markers)):
+        d.mkdir(parents=True, exist_ok=True)
+        yield d
+        return
+    tag = uuid.uuid4().hex[:8]
+    tmp = d.parent / f".{d.name}.saving-{tag}"
+    tmp.mkdir()
+    try:
+        yield tmp
+        old = d.parent / f".{d.name}.old-{tag}"
+        os.rename(d, old)
+        os.rename(tmp, d)
+        shutil.rmtree(old, ignore_errors=True)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
 
 
 def write_header(directory: Path, kind: str, version: int, header: str = HEADER,
@@ -179,7 +243,11 @@ def read_table(directory, name: str, index_col: str | None = "time",
     ``index_col``; ``columns``: only these (besides the index)."""
     p = table_path(directory, name)
     if p.suffix == ".csv":
-        df = read_csv(p, index_col=index_col, **csv_kw)
+        try:
+            df = read_csv(p, index_col=index_col, **csv_kw)
+        except (ValueError, pd.errors.ParserError) as e:  # (EmptyDataError is a ValueError)
+            raise ModelError("directory", f"= {str(p.parent)!r}: {p.name} is unreadable "
+                             f"({str(e).splitlines()[0][:200]})") from None
         return df if columns is None else df[columns]
     import pyarrow.parquet as pq
 

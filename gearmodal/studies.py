@@ -36,6 +36,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import ModelError
+from .result_io import sha256_of
 from .summary import summarize
 
 __all__ = ["load_result", "load_table", "summarize", "sweep"]
@@ -230,7 +231,7 @@ CHECKSUMS = "sha256.json"
 
 
 def _sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    return sha256_of(path)
 
 
 def _read_case_file(path: Path) -> pd.DataFrame:

@@ -1,6 +1,8 @@
 """The Python API checks what the files check (issue 40 item 1, in part): loads, callables,
 Series, methods and their options refused with one error naming the argument, before the run."""
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -135,6 +137,12 @@ def test_a_damaged_saved_table_is_refused_naming_it(tmp_path):
                      {"scene.t_end": 0.05}).simulate()
     sim.save(tmp_path)
     _damage(tmp_path / "forces.parquet")
+    with pytest.raises(gm.ModelError, match=r"forces\.parquet was damaged or changed"):
+        gm.SimulationResult.load(tmp_path)  # its SHA-256
+    # a result saved before the checksums: the pages' CRCs still refuse it when read
+    head = json.loads((tmp_path / "result.json").read_text())
+    del head["sha256"]
+    (tmp_path / "result.json").write_text(json.dumps(head))
     back = gm.SimulationResult.load(tmp_path)
     with pytest.raises(gm.ModelError, match=r"forces\.parquet is unreadable"):
         _ = back.forces
@@ -153,3 +161,70 @@ def test_a_damaged_stored_case_is_computed_again(tmp_path):
         again = gm.sweep(scene, grid, store=tmp_path, progress=False, max_workers=1)
     assert list(again.cached) == [False, True]
     pd.testing.assert_series_equal(again.n_events, first.n_events)
+
+
+def _truncate(path, frac=0.5):
+    b = path.read_bytes()
+    path.write_bytes(b[:int(len(b) * frac)])
+
+
+def _drop_rows(path, n=50):
+    lines = path.read_text().splitlines(True)
+    path.write_text("".join(lines[:-n]))
+
+
+def _edit_cell(path):
+    lines = path.read_text().splitlines(True)
+    cells = lines[5].split(",")
+    cells[1] = "maybe"
+    lines[5] = ",".join(cells)
+    path.write_text("".join(lines))
+
+
+@pytest.mark.parametrize("name, damage", [
+    ("q.csv", _truncate), ("forces.csv", _drop_rows), ("contact_state.csv", _edit_cell),
+    ("events.csv", lambda p: p.write_text(p.read_text().replace("closed", "clsoed", 1))),
+    ("settings.json", _truncate), ("q.csv", lambda p: p.write_text("")),
+    ("turning_points.csv", _truncate),
+])
+def test_a_damaged_or_edited_saved_csv_is_named_not_loaded(tmp_path, name, damage):
+    """A CSV has no checksum of its own: a truncated table, 50 rows missing, an edited cell or
+    event state, a truncated settings.json, an emptied table loaded as different data (or as
+    a raw pandas/json error) before; the header's SHA-256 of every file names it now."""
+    sim = gm.simulate(PAIR, 0.01, dt=1e-4, v0={"pinion.theta": 1.0})
+    sim.save(tmp_path, format="csv")
+    gm.SimulationResult.load(tmp_path)  # intact: loads
+    damage(tmp_path / name)
+    with pytest.raises(gm.ModelError, match=rf"{name.replace('.', '[.]')} was damaged or "
+                       "changed after it was saved"):
+        gm.SimulationResult.load(tmp_path)
+
+
+def test_a_save_over_an_earlier_result_is_atomic(tmp_path, monkeypatch):
+    """A save that fails half-way (a full disk) leaves the earlier result there, loading as it
+    was, and nothing beside it; a save that completes replaces it whole."""
+    import gearmodal.integrate.result as R
+
+    first = gm.simulate(PAIR, 0.01, dt=1e-4, v0={"pinion.theta": 1.0})
+    first.save(tmp_path / "run")
+    second = gm.simulate(PAIR, 0.02, dt=1e-4, v0={"pinion.theta": 2.0})
+    calls = {"n": 0}
+    write = R.write_table
+
+    def full_disk(*a, **k):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise OSError(28, "No space left on device")
+        return write(*a, **k)
+
+    monkeypatch.setattr(R, "write_table", full_disk)
+    with pytest.raises(OSError, match="No space left"):
+        second.save(tmp_path / "run")
+    monkeypatch.undo()
+    back = gm.SimulationResult.load(tmp_path / "run")
+    pd.testing.assert_frame_equal(back.q, first.q, check_exact=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+    second.save(tmp_path / "run", format="csv")
+    back = gm.SimulationResult.load(tmp_path / "run")
+    pd.testing.assert_frame_equal(back.q, second.q, check_exact=True)
+    assert not list((tmp_path / "run").glob("*.parquet"))  # replaced whole

@@ -140,7 +140,7 @@ def test_saved_results_load_back_in_either_format_and_the_csv_layout_1(tmp_path)
     pd.testing.assert_frame_equal(gm.SimulationResult.load(tmp_path / "copy").forces,
                                   sim.forces, check_exact=True)
     (tmp_path / "pq" / "v.parquet").unlink()
-    with pytest.raises(gm.ModelError, match=r"v\.parquet \(or v\.csv\) is missing"):
+    with pytest.raises(gm.ModelError, match=r"v\.parquet is missing \(it was saved\)"):
         gm.SimulationResult.load(tmp_path / "pq")
     with pytest.raises(gm.ModelError, match="format = 'xlsx'"):
         sim.save(tmp_path / "x", format="xlsx")

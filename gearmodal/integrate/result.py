@@ -17,13 +17,16 @@ from ..result_io import (
     VIEW_ROWS,
     copy_table,
     decimated,
+    digests,
     parquet_parts,
     read_header,
     read_table,
     remove_table,
+    replacing,
     table_chunks,
     table_path,
     thin_frame,
+    verify_digests,
     write_header,
     write_table,
 )
@@ -622,13 +625,25 @@ class SimulationResult:
         floats exact) or CSV (``format="csv"``), ``settings.json`` (settings and ``stats``)
         and ``result.json`` (layout version, initial state): what :meth:`load` reads back. A
         stored run (``stored``) saved to its own directory writes only what is not there
-        yet; to another directory its tables are copied, not read."""
+        yet; to another directory its tables are copied, not read. Saving over an earlier
+        result replaces it whole (it stays readable until the new one is complete), and
+        ``result.json`` holds every file's SHA-256: :meth:`load` names a damaged or edited
+        file instead of loading it."""
         from ..result_io import _check_format
 
         _check_format(format)
         d = Path(directory)
-        d.mkdir(parents=True, exist_ok=True)
-        same = self.stored is not None and d.resolve() == Path(self.stored).resolve()
+        same = self.stored is not None and d.is_dir() \
+            and d.resolve() == Path(self.stored).resolve()
+        if same:  # streamed here: the rest beside it
+            self._write(d, format, True)
+            return d
+        with replacing(d) as target:  # an earlier result there stays until this one is whole
+            self._write(target, format, False)
+        return d
+
+    def _write(self, d: Path, format: str, same: bool) -> None:
+        """:meth:`save`'s files into ``d`` (``same``: the run's own stored directory)."""
         for name in (*STORED_TABLES, "events"):
             src = None
             if self.stored is not None and self.__dict__.get("_" + name) is None:
@@ -666,10 +681,16 @@ class SimulationResult:
             write_table(self.constraint_residual, d, "constraint_residual", format)
         (d / "settings.json").write_text(json.dumps(
             {**self.settings, "stats": self.stats}, indent=2, default=str))
+        # every file's SHA-256 (a CSV has no checksum of its own; a Parquet table's pages do,
+        # not its footer or a folder's list of parts): a damaged or edited file is named when
+        # the result is loaded
+        names = [f"{n}.{format}" for n in (*STORED_TABLES, "events", "peak_bins",
+                                           "turning_points", "elements",
+                                           "constraint_forces", "constraint_residual")]
         write_header(d, "SimulationResult", SAVE_VERSION, initial_state=self.initial_state,
                      constraints=self.constraint_forces is not None, tables=format,
-                     span=list(self._span()))
-        return d
+                     span=list(self._span()),
+                     sha256=digests(d, [*names, "settings.json"]))
 
     @classmethod
     def load(cls, directory) -> SimulationResult:
@@ -679,6 +700,7 @@ class SimulationResult:
         an older layout is refused naming it."""
         d = Path(directory)
         head = read_header(d, "SimulationResult", (1, SAVE_VERSION))
+        verify_digests(d, head.get("sha256") or {})  # (saved before the checksums: none)
         for name in (*STORED_TABLES, "events"):
             table_path(d, name)  # every table there (a missing one named now, not later)
         bins = elements = None
@@ -696,7 +718,11 @@ class SimulationResult:
         if head.get("constraints"):
             extra = {"constraint_forces": read_table(d, "constraint_forces"),
                      "constraint_residual": read_table(d, "constraint_residual")}
-        meta = json.loads((d / "settings.json").read_text())
+        try:
+            meta = json.loads((d / "settings.json").read_text())
+        except (OSError, ValueError) as e:
+            raise ModelError("directory", f"= {str(d)!r}: settings.json is unreadable "
+                             f"({e})") from None
         stats = meta.pop("stats", {})
         span = head.get("span")
         return cls(t=None, tables=StoredTables(d), stored=d,

@@ -76,7 +76,15 @@ from ..integrate.azimuth import AzimuthAssembler
 from ..integrate.system import PiecewiseLinearSystem
 from ..massscale import scaled_mass
 from ..model.components import G_STANDARD, GRAVITY
-from ..result_io import TableWriter, read_header, write_header
+from ..result_io import (
+    HEADER,
+    TableWriter,
+    digests,
+    read_header,
+    replacing,
+    verify_digests,
+    write_header,
+)
 from ..static import equilibrium
 from .rotor import LOAD_COLUMNS
 from .turbine import RPM, TURBINE_COLUMNS, Turbine, TurbineResult, mark_cut_in
@@ -140,19 +148,33 @@ class DrivetrainResult:
         """Write the turbine loads (``turbine_loads``, ``turbine.json``), the gearbox results
         (``forces``, ``events``, ``q``, ``v``, ``settings.json``...: as
         :meth:`SimulationResult.save`; Parquet, or CSV with ``format="csv"``) and
-        ``stats.json``: what :meth:`load` reads back."""
-        d = self.turbine.save(directory, format)
+        ``stats.json``: what :meth:`load` reads back. Saving over an earlier result replaces
+        it whole (it stays readable until the new one is complete); the headers hold every
+        file's SHA-256, which :meth:`load` checks."""
+        d = Path(directory)
+        stored = self.gearbox.stored
+        if stored is not None and d.is_dir() and d.resolve() == Path(stored).resolve():
+            self._write(d, format)  # streamed here: the rest beside it
+            return d
+        with replacing(d, (HEADER, "drivetrain.json")) as target:
+            self._write(target, format)
+        return d
+
+    def _write(self, d: Path, format: str) -> None:
+        self.turbine.save(d, format)
         self.gearbox.save(d, format)
         (d / "stats.json").write_text(json.dumps(self.stats, indent=2))
-        write_header(d, "DrivetrainResult", SAVE_VERSION, header="drivetrain.json")
-        return d
+        write_header(d, "DrivetrainResult", SAVE_VERSION, header="drivetrain.json",
+                     sha256=digests(d, [f"turbine_loads.{format}", "turbine.json",
+                                        "stats.json"]))
 
     @classmethod
     def load(cls, directory) -> DrivetrainResult:
         """The run :meth:`save` wrote to ``directory``: turbine loads and the gearbox result,
         floats exact; an older layout is refused naming the directory."""
         d = Path(directory)
-        read_header(d, "DrivetrainResult", (1, SAVE_VERSION), header="drivetrain.json")
+        head = read_header(d, "DrivetrainResult", (1, SAVE_VERSION), header="drivetrain.json")
+        verify_digests(d, head.get("sha256") or {})
         return cls(turbine=TurbineResult.load(d), gearbox=SimulationResult.load(d),
                    stats=json.loads((d / "stats.json").read_text()))
 
