@@ -432,15 +432,30 @@ def _out_folder(value: str) -> str:
     return value
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, a batch system's time limit), raised where the run is, so that it
+    ends as Ctrl-C does: the sweep's workers ended, what was stored kept, one line."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
 def main(argv=None) -> int:
     """The command line; returns the exit status (0 done, 2 bad input, 3 internal error, 130
-    interrupted). Bad input gets one line naming the field; an internal error one line and a
-    hint (``--debug`` shows its traceback)."""
+    interrupted, 143 terminated). Bad input gets one line naming the field; an internal error
+    one line and a hint (``--debug`` shows its traceback)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     if debug:
         argv.remove("--debug")
     args = build_parser().parse_args(argv)
+    import signal
+    import threading
+
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         if getattr(args, "out", None):
             _check_writable(args.out)  # before any computing
@@ -451,7 +466,10 @@ def main(argv=None) -> int:
     except FileNotFoundError as e:
         print(f"gearmodal: error: {e.filename or e}: file not found", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as e:
+        if isinstance(e, Terminated):
+            print("gearmodal: terminated", file=sys.stderr)
+            return 143
         print("gearmodal: interrupted", file=sys.stderr)
         return 130
     except Exception as e:
@@ -465,6 +483,9 @@ def main(argv=None) -> int:
         print(f"gearmodal: internal error: {type(e).__name__}: {str(e)[:300]} (a bug: please "
               "report it with the command; add --debug for the traceback)", file=sys.stderr)
         return 3
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

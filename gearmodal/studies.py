@@ -143,6 +143,9 @@ def _worker_start(parent: int) -> None:
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # SIGTERM ends a worker at once (the parent-death signal below is one), whatever handler
+    # a forked worker inherited from the command line's (which ends a run cleanly)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
         import ctypes
 

@@ -65,7 +65,11 @@ def test_workers_end_with_a_killed_parent(tmp_path):
 
 
 @pytest.mark.slow
-def test_ctrl_c_is_one_line_and_ends_the_workers(tmp_path):
+@pytest.mark.parametrize("how, status, line", [
+    ("group", 130, "gearmodal: interrupted"),  # Ctrl-C reaches the whole foreground group
+    ("term", 143, "gearmodal: terminated"),  # kill, a batch system's limit: the parent only
+])
+def test_ctrl_c_and_sigterm_are_one_line_and_end_the_workers(tmp_path, how, status, line):
     exe = os.path.join(os.path.dirname(sys.executable), "gearmodal")
     p = subprocess.Popen([exe, "study", "fatigue", "--quick", "--seeds", "1", "--duration",
                           "300", "--workers", "2", "--quiet", "--out", str(tmp_path)],
@@ -74,10 +78,13 @@ def test_ctrl_c_is_one_line_and_ends_the_workers(tmp_path):
         assert _wait(lambda: len(_children(p.pid)) >= 2, 120.0)
         workers = _children(p.pid)
         time.sleep(1.0)
-        os.killpg(p.pid, signal.SIGINT)  # Ctrl-C reaches the whole foreground group
+        if how == "group":
+            os.killpg(p.pid, signal.SIGINT)
+        else:
+            os.kill(p.pid, signal.SIGTERM)
         err = p.communicate(timeout=120)[1]
-        assert p.returncode == 130
-        assert err.strip().splitlines() == ["gearmodal: interrupted"], err[-2000:]
+        assert p.returncode == status
+        assert err.strip().splitlines() == [line], err[-2000:]
         assert _wait(lambda: not any(_running(w) for w in workers), 60.0), workers
     finally:
         if p.poll() is None:
