@@ -494,7 +494,7 @@ def energies(asm: Assembly, shapes: np.ndarray, freq_hz: np.ndarray, state=None)
     for j, b in enumerate(bodies):
         sl = asm.body_slices[b]
         phi = shapes[sl]
-        ke[:, j] = np.real(np.einsum("im,ij,jm->m", phi.conj(), asm.M[sl, sl], phi))
+        ke[:, j] = np.real((phi.conj() * (asm.M[sl, sl] @ phi)).sum(axis=0))
     tot = ke.sum(axis=1, keepdims=True)
     ke = np.divide(ke, tot, out=np.zeros_like(ke), where=tot > 0)
     c = asm.contacts
@@ -509,7 +509,9 @@ def energies(asm: Assembly, shapes: np.ndarray, freq_hz: np.ndarray, state=None)
         se[:, column[c.element[e]]] += c.stiffness[e] * np.abs(d) ** 2
     # always-active springs of K (bearings without clearance, shafts): per body pair is not
     # recoverable from K alone, so they are reported together as "linear springs".
-    lin = np.real(np.einsum("im,ij,jm->m", shapes.conj(), asm.K, shapes))
+    # (a product, then the column sums: an einsum over i, j, m without a contraction path
+    # is a triple loop, 39 ms against 3.4 ms at 204 DOF)
+    lin = np.real((shapes.conj() * (asm.K @ shapes)).sum(axis=0))
     se = np.column_stack([se, lin]) if len(elems) else lin[:, None]
     cols = [*elems, "linear springs"]
     tot = se.sum(axis=1, keepdims=True)

@@ -85,8 +85,8 @@ def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e
     fmax = float(np.max(freq_hz)) if len(freq_hz) else 0.0
     if K is None:
         K = asm.stiffness()
-    num = np.real(np.einsum("im,ij,jm->m", shapes.conj(), K, shapes))
-    den = np.real(np.einsum("im,ij,jm->m", shapes.conj(), asm.M, shapes))
+    num = np.real((shapes.conj() * (K @ shapes)).sum(axis=0))
+    den = np.real((shapes.conj() * (asm.M @ shapes)).sum(axis=0))
     static_hz = np.sqrt(np.clip(num / den, 0, None)) / (2 * np.pi)
     g = _groups(tuple(asm.dof_names))
     e = dof_energy(asm, shapes)
