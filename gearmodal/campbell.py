@@ -21,7 +21,7 @@ from scipy.linalg import blas
 
 from .assembly import reduction
 from .errors import ModelError
-from .modal import RPM, eigensolve, geometry_table
+from .modal import RPM, band_basis, check_band, eigensolve, geometry_table
 from .model.components import Gear
 from .model.model import Model
 from .model.validate import plausible
@@ -437,7 +437,8 @@ def _plain(x):
 
 
 def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state=None,
-             progress=None) -> CampbellResult:
+             progress=None, n_modes: int | None = None,
+             fmax_hz: float | None = None) -> CampbellResult:
     """Natural frequencies of ``model`` over input speeds ``speeds_rpm`` (rpm), MAC-tracked.
 
     Parameters
@@ -453,6 +454,11 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     state : contact state (default nominal; with loads, the equilibrium's starting guess).
     progress : optional callable ``progress(i, n)`` called after each speed (the CLI passes a
         progress bar; the solver never prints).
+    n_modes, fmax_hz : a band: only the ``n_modes`` lowest modes at every speed, or as many as
+        the non-rotating undamped problem has below ``fmax_hz`` (both: the fewer), from the
+        problem projected on twice as many undamped modes of each contact state
+        (:func:`gearmodal.modal.band_solve`: an approximation, its error against the full
+        solve measured); default: every mode, solved in full.
     """
     from .coupling import Coupled
 
@@ -479,18 +485,42 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     n = red.n
     M = red.M
     solvers: dict[bytes, object] = {}
+    check_band(n_modes, fmax_hz)
+    band = n_modes is not None or fmax_hz is not None
+    if fmax_hz is not None:  # the band's width: the modes below fmax_hz at rest, undamped
+        w2 = sla.eigh(red.stiffness(states[0]), M, eigvals_only=True)
+        below = max(1, int(np.sum(w2 <= (2 * math.pi * fmax_hz) ** 2)))
+        n_modes = below if n_modes is None else min(n_modes, below)
 
     def solve_at(i, om):
         st = states[i]
         key = st.tobytes()
         if key not in solvers:  # one precomputed solver per contact state met in the sweep
-            solvers[key] = _sweep_solver(M, red.damping(st), red.stiffness(st), red.G,
-                                         red.K_cent)
-        return solvers[key](om)
+            V = band_basis(M, red.stiffness(st), n_modes) if band else None
+            if V is None:
+                solvers[key] = (None, _sweep_solver(M, red.damping(st), red.stiffness(st),
+                                                    red.G, red.K_cent))
+            else:  # the band: the problem projected on the state's basis, solved per speed
+
+                def pr(X):
+                    return None if X is None else V.T @ X @ V
+
+                solvers[key] = (V, _sweep_solver(pr(M), pr(red.damping(st)),
+                                                 pr(red.stiffness(st)), pr(red.G),
+                                                 pr(red.K_cent)))
+        V, solve = solvers[key]
+        lam, phi = solve(om)
+        if V is not None:
+            phi = V @ phi
+        if band:
+            lam, phi = lam[:n_modes], phi[:, :n_modes]
+        return lam, phi
 
     label = _labeller(asm)
     chunk = max(1, _LABEL_ENTRIES // max(n * n, 1))  # speeds labelled together
     pending = []  # (speed index, shape, M shape) not yet labelled
+    if band:
+        n = min(n, n_modes)  # the modes reported at every speed
     freqs = np.zeros((s.size, n))
     zetas = np.zeros((s.size, n))
     types = np.empty((s.size, n), dtype=object)
