@@ -103,9 +103,10 @@ def cmd_campbell(args) -> int:
     loads = _loads(args, model)
     with tqdm(total=len(speeds), desc="Campbell sweep", unit="speed",
               disable=args.quiet) as bar:
-        camp = campbell(model, speeds, loads=loads, progress=lambda i, n: bar.update(1))
+        camp = campbell(model, speeds, loads=loads, progress=lambda i, n: bar.update(1),
+                        n_modes=args.n_modes, fmax_hz=args.fmax_hz)
     rated = model.rated_speed_rpm if model.rated_speed_rpm is not None else float(speeds[-1])
-    res = modal(model, speed_rpm=rated, loads=loads)
+    res = modal(model, speed_rpm=rated, loads=loads, n_modes=args.n_modes, fmax_hz=args.fmax_hz)
     out = write_campbell_report(camp, res, args.out, summary=model.summary())
     print(f"wrote {out}/report.html")
     return 0
@@ -117,7 +118,8 @@ def cmd_modal(args) -> int:
 
     model = _load(args.model)
     speed = args.speed if args.speed is not None else (model.rated_speed_rpm or 0.0)
-    res = modal(model, speed_rpm=speed, loads=_loads(args, model))
+    res = modal(model, speed_rpm=speed, loads=_loads(args, model), n_modes=args.n_modes,
+                fmax_hz=args.fmax_hz)
     out = write_modal_report(res, args.out, summary=model.summary())
     print(f"wrote {out}/report.html")
     return 0
@@ -343,6 +345,11 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--load", action="append", metavar="NAME=VALUE",
                    help="a load in N or N m (repeatable)")
     m.add_argument("--balance", metavar="NAME", help="set this load to balance the others")
+    for sp in (c, m):
+        sp.add_argument("--n-modes", type=int, dest="n_modes", metavar="N",
+                        help="a band: only the N lowest modes (default: every mode)")
+        sp.add_argument("--fmax-hz", type=float, dest="fmax_hz", metavar="HZ",
+                        help="a band: only the modes below HZ (default: every mode)")
     m.set_defaults(func=cmd_modal)
     sm = sub.add_parser("simulate", help="simulate a scene (model + loads + solver settings)")
     sm.add_argument("scene", help="scene file (TOML), see gearmodal/scene.py")
