@@ -374,7 +374,14 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         meta_path = Path(store) / "sweep.json"
         old = {}
         if meta_path.exists():
-            old = json.loads(meta_path.read_text())
+            try:
+                old = json.loads(meta_path.read_text())
+                if not isinstance(old, dict):
+                    raise ValueError(f"a {type(old).__name__}, not a table")
+            except (OSError, ValueError) as e:  # (damaged: it is written atomically)
+                raise ModelError("store", f"= {str(store)!r}: sweep.json is unreadable "
+                                 f"({str(e)[:120]}), so the scene its cases belong to is "
+                                 "unknown: use a new store or delete it") from None
             if old.get("format") != STORE_FORMAT:
                 raise ModelError("store", f"= {str(store)!r} was written by an older gearmodal "
                                  f"(format {old.get('format', 1)!r}, this one reads "
@@ -394,6 +401,12 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
         os.replace(tmp, meta_path)
     rows: dict[str, dict] = {}
     for cid in ids:
+        if root is not None and (root / cid).is_dir() \
+                and not (root / cid / "row.parquet").exists():
+            # a case folder without its row (damaged: cases are written whole): again
+            warnings.warn(f"sweep: stored case {cid} has no row.parquet; computing it again",
+                          stacklevel=2)
+            shutil.rmtree(root / cid, ignore_errors=True)
         if root is not None and (root / cid / "row.parquet").exists():
             try:
                 r = _read_case_file(root / cid / "row.parquet").iloc[0].to_dict()

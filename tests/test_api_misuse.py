@@ -161,6 +161,20 @@ def test_a_damaged_stored_case_is_computed_again(tmp_path):
         again = gm.sweep(scene, grid, store=tmp_path, progress=False, max_workers=1)
     assert list(again.cached) == [False, True]
     pd.testing.assert_series_equal(again.n_events, first.n_events)
+    # a case folder without its row file, a case's checksums unreadable: computed again
+    (tmp_path / "cases" / cid / "row.parquet").unlink()
+    with pytest.warns(UserWarning, match=rf"stored case {cid} has no row.parquet"):
+        again = gm.sweep(scene, grid, store=tmp_path, progress=False, max_workers=1)
+    assert list(again.cached) == [False, True]
+    (tmp_path / "cases" / cid / "sha256.json").write_text("{")
+    with pytest.warns(UserWarning, match=rf"stored case {cid} is damaged"):
+        again = gm.sweep(scene, grid, store=tmp_path, progress=False, max_workers=1)
+    pd.testing.assert_series_equal(again.n_events, first.n_events)
+    # the store's own file damaged: which scene its cases belong to is unknown: refused
+    meta = tmp_path / "sweep.json"
+    meta.write_bytes(meta.read_bytes()[:40])
+    with pytest.raises(gm.ModelError, match="sweep.json is unreadable .* use a new store"):
+        gm.sweep(scene, grid, store=tmp_path, progress=False, max_workers=1)
 
 
 def _truncate(path, frac=0.5):
