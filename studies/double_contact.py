@@ -89,8 +89,10 @@ def cases(duration: float = 30.0, seed: int = 1, gravity: bool = True,
     the gearbox bodies' weight (on, as the scene's default); ``top_frequency_hz``: the
     mass-scaling rung (:mod:`gearmodal.massscale`; default: the full model); ``dt``: the
     output step, s (default: the scene's, 1 ms)."""
-    # (no fatigue count here: the runs skip the exact turning points, which would cost them
-    # up to 65 % more gearbox integration)
+    # the runs skip the exact turning points (+65-71 % gearbox CPU: the study would fall
+    # below 20x real time), so its DELs count the 1 ms rows (dels_exact False; on the 30 s
+    # clearance case 0.25 % below the exact count, benchmarks/exact_fatigue.py): the
+    # fatigue study counts them exactly
     common = {"scene.t_end": duration, "wind.seed": seed, "turbine.gravity": gravity,
               "turbine.turning_points": False}
     if top_frequency_hz is not None:
