@@ -723,6 +723,33 @@ def _row_series(Bv, nt, h, ptr, idx, val, j, k_, c_, off_, out, tmp):
             out[k] += c_ * (k + 1.0) * tmp[k + 1] / h
 
 
+@numba.njit(cache=True, inline="always")
+def _radial_square(Bv, nt, h, sptr, sidx, sval, sk, sc, rx, ry, fx, fy, P, tmp):
+    """The series of a spring channel's squared magnitude over the piece ``Bv``: ``F_x^2 +
+    F_y^2`` of sparse rows ``rx`` and ``ry`` (``ry < 0``: ``F_x^2`` alone) into ``P``; returns
+    its number of terms, its last terms, together below rounding of its size, left out (a
+    degree near the series' own instead of twice it). ``fx``, ``fy``: the components'."""
+    two = ry >= 0
+    _row_series(Bv, nt, h, sptr, sidx, sval, rx, sk[rx], sc[rx], 0.0, fx, tmp)
+    if two:
+        _row_series(Bv, nt, h, sptr, sidx, sval, ry, sk[ry], sc[ry], 0.0, fy, tmp)
+    m2 = 2 * nt - 1
+    size = 0.0
+    for j in range(m2):
+        a = 0.0
+        for i in range(max(0, j - nt + 1), min(j, nt - 1) + 1):
+            a += fx[i] * fx[j - i]
+            if two:
+                a += fy[i] * fy[j - i]
+        P[j] = a
+        size += abs(a)
+    tail = 0.0
+    while m2 > 2 and tail + abs(P[m2 - 1]) <= 1e-17 * size:
+        tail += abs(P[m2 - 1])
+        m2 -= 1
+    return m2
+
+
 #: terms of a row's series formed for its first bound (:func:`_low_bound`): the rest is
 #: bounded by the magnitudes of the coordinates' terms from there on, ``REACH^16 / 16!`` = 0.13
 #: of the fastest mode's amplitude at most (the full series' magnitudes would allow
@@ -928,27 +955,8 @@ def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
                                 tmp, ee, False)
             if bx * bx + by * by <= thr * thr:
                 continue
-        _row_series(Bv, nt, h, sptr, sidx, sval, chp[ch, 0], sk[chp[ch, 0]], sc[chp[ch, 0]],
-                    0.0, fx, tmp)
-        if two:
-            _row_series(Bv, nt, h, sptr, sidx, sval, chp[ch, 1], sk[chp[ch, 1]],
-                        sc[chp[ch, 1]], 0.0, fy, tmp)
-        m2 = 2 * nt - 1
-        size = 0.0
-        for j in range(m2):
-            a = 0.0
-            for i in range(max(0, j - nt + 1), min(j, nt - 1) + 1):
-                a += fx[i] * fx[j - i]
-                if two:
-                    a += fy[i] * fy[j - i]
-            P[j] = a
-            size += abs(a)
-        # the square's last terms, together below rounding of its size, left out: a degree
-        # near the series' own instead of twice it
-        tail = 0.0
-        while m2 > 2 and tail + abs(P[m2 - 1]) <= 1e-17 * size:
-            tail += abs(P[m2 - 1])
-            m2 -= 1
+        m2 = _radial_square(Bv, nt, h, sptr, sidx, sval, sk, sc, chp[ch, 0], chp[ch, 1], fx,
+                            fy, P, tmp)
         if b0 == b1:
             v0 = P[0]
             v1 = P[m2 - 1]
@@ -1155,26 +1163,8 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
         ch = nct + r
         jump = TS[ch, 4] != 0.0 or TS[ch, 3] == 0.0
         TS[ch, 4] = 0.0
-        two = chp[r, 1] >= 0
-        _row_series(Bv, nt, h, sptr, sidx, sval, chp[r, 0], sk[chp[r, 0]], sc[chp[r, 0]], 0.0,
-                    fx, tmp)
-        if two:
-            _row_series(Bv, nt, h, sptr, sidx, sval, chp[r, 1], sk[chp[r, 1]],
-                        sc[chp[r, 1]], 0.0, fy, tmp)
-        m2 = 2 * nt - 1
-        size = 0.0
-        for j in range(m2):
-            a = 0.0
-            for i in range(max(0, j - nt + 1), min(j, nt - 1) + 1):
-                a += fx[i] * fx[j - i]
-                if two:
-                    a += fy[i] * fy[j - i]
-            P[j] = a
-            size += abs(a)
-        tail = 0.0  # the square's last terms below rounding of its size (as _track_peaks)
-        while m2 > 2 and tail + abs(P[m2 - 1]) <= 1e-17 * size:
-            tail += abs(P[m2 - 1])
-            m2 -= 1
+        m2 = _radial_square(Bv, nt, h, sptr, sidx, sval, sk, sc, chp[r, 0], chp[r, 1], fx, fy,
+                            P, tmp)
         ntp = _piece_turns(ch, P, m2, t_abs, h, te, jump, True, TS, TP, ntp, taus, d, ee,
                            wflat, stk)
     return ntp
