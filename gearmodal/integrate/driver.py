@@ -126,6 +126,14 @@ def _check_option(key: str, val) -> None:
             raise ModelError(key, f"= {val!r}: must be one of {', '.join(map(repr, spec))}")
         return
     kind, lo, hi = spec
+    if key == "atol" and isinstance(val, (list, tuple, np.ndarray)):
+        # solve_ivp's absolute tolerance per state component (its size is solve_ivp's check)
+        arr = np.asarray(val)
+        if arr.ndim != 1 or arr.size == 0 or arr.dtype.kind not in "iuf" \
+                or not (np.all(np.isfinite(arr)) and np.all((arr >= lo) & (arr <= hi))):
+            raise ModelError(key, f"= {val!r}: must be a number, or one per state component, "
+                             f"in [{lo:g}, {hi:g}]")
+        return
     ok = isinstance(val, (int, float, np.integer, np.floating)) and not isinstance(val, bool)
     if ok and kind == "integer":
         ok = float(val) == int(val)
