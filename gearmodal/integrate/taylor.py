@@ -655,6 +655,22 @@ def _upper(c, n, a, b, level, e):
     return top
 
 
+@numba.njit(cache=True, inline="always")
+def _next_turn(d, m, lo, b, sign, e, work, stk):
+    """The next root of ``p'`` (``d``, m terms) on ``[lo, b]`` where ``sign p'`` crosses from
+    <= 0 to > 0 (``sign`` -1: a maximum of ``p``, +1: a minimum), by :func:`first_root` on
+    ``p'`` shifted to ``[lo, b]``; ``inf`` if none. The alternating walk of :func:`poly_max`
+    and :func:`poly_turns` (each search starts where its function is not positive)."""
+    w = b - lo
+    if w <= 0.0:
+        return np.inf
+    _shift(d, m, lo, w, e)
+    for k in range(m):
+        e[k] *= sign
+    r = first_root(e[:m], work, stk)
+    return r if r == np.inf else lo + w * r
+
+
 @numba.njit(cache=True)
 def poly_max(c, a, b, thr, d, e, wflat, stk, counts):
     """``(value, tau)``: the largest value of ``p(tau) = sum_k c_k tau^k`` on ``[a, b]`` and
@@ -685,16 +701,10 @@ def poly_max(c, a, b, thr, d, e, wflat, stk, counts):
     # where p rises at a, else p' (the minimum before the next maximum)
     sign = 1.0 if _hpoly(d[:m], a) < 0.0 else -1.0
     for _ in range(2 * m + 2):  # p' has at most m - 1 roots
-        w = b - lo
-        if w <= 0.0:
-            break
-        _shift(d, m, lo, w, e)
-        for k in range(m):
-            e[k] *= sign
-        r = first_root(e[:m], work, stk)
+        r = _next_turn(d, m, lo, b, sign, e, work, stk)
         if r == np.inf:
             break
-        tau = min(lo + w * r, b)
+        tau = min(r, b)
         if sign < 0.0:
             v = _hpoly(c, tau)
             if v > best:
@@ -1031,18 +1041,9 @@ def poly_turns(c, n, te, taus, d, e, wflat, stk):
     sign = 1.0 if _hpoly(d[:m], 0.0) < 0.0 else -1.0
     cnt = 0
     for _ in range(2 * m + 2):  # p' has at most m - 1 roots
-        w = te - lo
-        if w <= 0.0:
-            break
-        _shift(d, m, lo, w, e)
-        for k in range(m):
-            e[k] *= sign
-        r = first_root(e[:m], work, stk)
-        if r == np.inf:
-            break
-        tau = lo + w * r
-        if tau >= te:
-            break  # at the piece's end: its end value, not an interior extremum
+        tau = _next_turn(d, m, lo, te, sign, e, work, stk)
+        if tau == np.inf or tau >= te:
+            break  # none left, or at the piece's end (its end value, not an extremum)
         taus[cnt] = tau
         cnt += 1
         lo = tau
