@@ -25,6 +25,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numba
@@ -250,7 +251,7 @@ def turning_dels(result, exponents, channels: list[str] | None = None, t_from: f
             streams[c] = RainflowStream(ms)
             streams[c].feed([start[c]])
     t0 = float(start.name)
-    for chunk in _chain(first, chunks):
+    for chunk in itertools.chain([first], chunks):
         chunk = chunk[chunk.index > t0]
         for ch, part in chunk.groupby("channel", sort=False, observed=True):
             st = streams.get(ch)
@@ -268,11 +269,6 @@ def turning_dels(result, exponents, channels: list[str] | None = None, t_from: f
     out = pd.DataFrame.from_dict(rows, orient="index", columns=[f"m={m:g}" for m in ms])
     out.index.name = "channel"
     return out
-
-
-def _chain(first, rest):
-    yield first
-    yield from rest
 
 
 def _row_at(result, t_from: float) -> pd.Series:
@@ -428,9 +424,9 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
                          "per rotor revolution, > 0")
     # the DELs from the exact solution's turning points where the run has them (they do not
     # depend on the output step), else from the rows
-    exact = turning_dels(sim, (ex["tooth_root"], ex["tooth_flank"]), flanks, t_skip, n_ref)
-    exact_b = turning_dels(sim, (ex["bearing"],), [f"{b}.radial" for b in bearings], t_skip,
-                           n_ref) if exact is not None else None
+    # (one pass over the turning points for every channel and exponent)
+    exact = turning_dels(sim, (ex["tooth_root"], ex["tooth_flank"], ex["bearing"]),
+                         [*flanks, *(f"{b}.radial" for b in bearings)], t_skip, n_ref)
     # the run's forces a chunk of rows at a time (a stored run's row groups): the flank forces
     # counted as they come (RainflowStream) where there are no turning points, the few signals
     # the rest needs kept per row
@@ -461,10 +457,10 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
     life = {b: rating_life(radial[b], ratio * speed, bearing_C, ex["bearing"]) for b in bearings}
     short = min(life, key=lambda b: life[b]["l10_h"])
     revs = float(np.sum(_weights(t) * ratio * np.abs(speed) / 60.0))
-    if exact is not None and exact_b is not None:
-        dels = {"del_tooth_N": float(exact.iloc[:, 0].max()),
-                "del_tooth_flank_N": float(exact.iloc[:, 1].max()),
-                "del_planet_bearing_N": float(exact_b.iloc[:, 0].max())}
+    if exact is not None:
+        dels = {"del_tooth_N": float(exact.iloc[:, 0][flanks].max()),
+                "del_tooth_flank_N": float(exact.iloc[:, 1][flanks].max()),
+                "del_planet_bearing_N": float(exact.iloc[:, 2].drop(flanks).max())}
     else:
         dels = {"del_tooth_N": max(st.damage_equivalent_load(ex["tooth_root"], n_ref)
                                    for st in streams.values()),
@@ -476,7 +472,7 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
     rotor = tur["torque_Nm"][tur.index >= t_skip - 1e-9]
     row = {"duration_s": float(t[-1] - t[0]),
            **dels,
-           "dels_exact": exact is not None and exact_b is not None,
+           "dels_exact": exact is not None,
            "l10_planet_bearing_h": life[short]["l10_h"],
            "planet_bearing_peq_N": life[short]["equivalent_load_N"],
            "planet_bearing_revolutions": revs,

@@ -538,26 +538,26 @@ class SimulationResult:
         columns = set(self.force_columns())
         bearings = [b for b in self.elements_of("planet_bearing")
                     if f"{b}.x" in columns and f"{b}.y" in columns]
-        kinds = ("tooth_root", "tooth_flank")
-        exact = turning_dels(self, [ex[k] for k in kinds], flanks, t_from, n_ref) \
-            if flanks else None
-        exact_b = turning_dels(self, [ex["bearing"]], [f"{b}.radial" for b in bearings],
-                               t_from, n_ref) if bearings else None
+        kinds = ("tooth_root", "tooth_flank", "bearing")
+        radials = [f"{b}.radial" for b in bearings]
+        # one pass over the turning points for every channel and exponent
+        exact = turning_dels(self, [ex[k] for k in kinds], flanks + radials, t_from, n_ref) \
+            if flanks or radials else None
         rows = []
         f = None
-        if exact is None or (bearings and exact_b is None):
+        if exact is None:
             f = self.forces[self.forces.index >= t_from - 1e-12]
         for col in flanks:
-            for j, kind in enumerate(kinds):
+            for j, kind in enumerate(kinds[:2]):
                 if exact is not None:
                     rows.append((col, kind, ex[kind], float(exact.loc[col].iloc[j]), True))
                 else:
                     rows.append((col, kind, ex[kind],
                                  damage_equivalent_load(f[col], ex[kind], n_ref), False))
         for b in bearings:
-            if exact_b is not None:
+            if exact is not None:
                 rows.append((f"{b}.radial", "bearing", ex["bearing"],
-                             float(exact_b.loc[f"{b}.radial"].iloc[0]), True))
+                             float(exact.loc[f"{b}.radial"].iloc[2]), True))
             else:
                 radial = np.hypot(f[f"{b}.x"], f[f"{b}.y"])
                 rows.append((f"{b}.radial", "bearing", ex["bearing"],
