@@ -21,6 +21,7 @@ from .coupling import (
 )
 from .errors import ModelError
 from .integrate import Harmonic, SimulationResult, simulate
+from .integrate.stepper import Drive, Stepper
 from .modal import ModalResult, modal
 from .model import (
     DOF_LEVELS,
@@ -49,10 +50,10 @@ from .studies import sweep
 __version__ = "0.1.0"
 
 __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Constraint", "Coupled",
-           "CoupledAssembly", "Equilibrium", "FidelityChoice", "Frame", "Joint", "LinearConstraint",
-           "LinearSystem", "ModelSystem", "System",
+           "CoupledAssembly", "Drive", "Equilibrium", "FidelityChoice", "Frame", "Joint",
+           "LinearConstraint", "LinearSystem", "ModelSystem", "System",
            "Gear", "Harmonic", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
-           "SimulationResult", "simulate",
+           "SimulationResult", "Stepper", "simulate",
            "assemble", "balance", "campbell", "choose_fidelity", "drivetrain", "equilibrium",
            "gear_pair",
            "lin_parker_stage", "load", "loads", "dump", "dumps", "modal", "parallel_stage",

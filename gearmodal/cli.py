@@ -1,4 +1,5 @@
-"""Command line: ``gearmodal campbell|modal|info MODEL.toml``, ``gearmodal simulate SCENE.toml``
+"""Command line: ``gearmodal campbell|modal|info MODEL.toml``, ``gearmodal fmu MODEL.toml --out
+FILE.fmu`` (:mod:`gearmodal.fmu`), ``gearmodal simulate SCENE.toml``
 (a gearbox scene with loads, loads from an aeroelastic output file, or the turbine in wind
 with the gearbox: see :mod:`gearmodal.scene`), ``gearmodal study NAME --out DIR`` (the
 paper's studies in ``studies/``).
@@ -305,6 +306,22 @@ def cmd_docs_figures(args) -> int:
     return 0
 
 
+def cmd_fmu(args) -> int:
+    from .fmu import export_fmu
+
+    drive = None
+    if args.drive:
+        if args.drive_stiffness is None:
+            raise ModelError("--drive-stiffness", "is needed with --drive (N m/rad)")
+        drive = {"dof": args.drive, "stiffness": args.drive_stiffness,
+                 "damping": args.drive_damping}
+    out = export_fmu(_named(args.model, "models"), args.fmu_out, inputs=args.input,
+                     outputs=args.output, drive=drive, dt=args.dt,
+                     speed_rpm=args.speed_rpm, method=args.method)
+    print(f"wrote {out}")
+    return 0
+
+
 def cmd_info(args) -> int:
     model = _load(args.model)
     print(model.summary())
@@ -404,6 +421,32 @@ def build_parser() -> argparse.ArgumentParser:
                    "(default: a temporary one; given, a rerun resumes the studies)")
     d.add_argument("--quiet", action="store_true", help="no progress lines")
     d.set_defaults(func=cmd_docs_figures)
+    f = sub.add_parser("fmu", help="the model as an FMI 2.0 co-simulation FMU (the fmu "
+                       "extra; the host needs Python with gearmodal)")
+    f.add_argument("model", help="model file (TOML)")
+    f.add_argument("--out", required=True, dest="fmu_out", metavar="FILE.fmu",
+                   help="the FMU to write")
+    f.add_argument("--input", action="append", metavar="LOAD",
+                   help="a load the host sets (repeatable; default: the torque on every "
+                        "input and output wheel)")
+    f.add_argument("--output", action="append", metavar="NAME",
+                   help="an output (repeatable): a DOF, DOF.velocity, a force column, "
+                        "drive.torque (default: the wheels' angles and speeds and every "
+                        "force)")
+    f.add_argument("--drive", metavar="DOF", help="the host's shaft drives this rotation "
+                   "through a spring (inputs drive.angle, drive.speed; output drive.torque)")
+    f.add_argument("--drive-stiffness", type=float, dest="drive_stiffness", metavar="K",
+                   help="the drive's torsional stiffness, N m/rad")
+    f.add_argument("--drive-damping", type=float, default=0.0, dest="drive_damping",
+                   metavar="C", help="the drive's damping, N m s/rad (default 0)")
+    f.add_argument("--dt", type=float, default=1e-4, help="output step, s (the parameter's "
+                   "start value; a communication step must be a whole number of them; "
+                   "default 1e-4)")
+    f.add_argument("--speed-rpm", type=float, default=0.0, dest="speed_rpm",
+                   help="input speed, rpm (the parameter's start value; default 0)")
+    f.add_argument("--method", default="exact", choices=("exact", "newmark", "scipy"),
+                   help="integration method (default exact)")
+    f.set_defaults(func=cmd_fmu)
     i = sub.add_parser("info", help="model summary and DOF names")
     i.add_argument("model")
     i.set_defaults(func=cmd_info)

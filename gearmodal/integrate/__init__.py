@@ -338,14 +338,16 @@ def mesh_stiffness(system: PiecewiseLinearSystem, azimuth: np.ndarray):
 
 
 def build_result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings,
-                 peaks=None) -> SimulationResult:
+                 peaks=None, displacements=None) -> SimulationResult:
     """The :class:`SimulationResult` of a run: its tables are built on first read
     (:class:`_Tables`). ``events``: (n, 6 or 8) rows or a list of tuples
     (:func:`event_array`). ``mesh_k``: :func:`mesh_stiffness` of the run. ``peaks``: the run's
-    :class:`~gearmodal.integrate.peaks.PeakTracker` (the exact peaks, where it has them)."""
+    :class:`~gearmodal.integrate.peaks.PeakTracker` (the exact peaks, where it has them).
+    ``displacements``: the ``q`` table's rows when they are not the states' first half (the
+    stepper's absolute rotations; the forces still come from the states)."""
     system = seg_systems[0][2]
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
-    tables = _Tables(seg_systems, t, X, S, event_array([events]), mesh_k)
+    tables = _Tables(seg_systems, t, X, S, event_array([events]), mesh_k, displacements)
     bins = turning = None
     if peaks is not None:
         bins = peak_table(peaks, system.asm.contacts.columns, float(t[-1]))
@@ -397,8 +399,10 @@ class _Tables:
     """Builds a run's tables from its arrays (:class:`SimulationResult` asks for each when it is
     first read): ``q``, ``v``, ``forces``, ``events``, ``contact_state``."""
 
-    def __init__(self, seg_systems, t, X, S, events: np.ndarray, mesh_k=None):
+    def __init__(self, seg_systems, t, X, S, events: np.ndarray, mesh_k=None,
+                 displacements=None):
         self.seg_systems, self.t, self.X, self.S, self.ev = seg_systems, t, X, S, events
+        self.Q = displacements
         self.mesh_k = mesh_k
         self.system = seg_systems[0][2]
         self._index = None
@@ -422,8 +426,8 @@ class _Tables:
     def q(self) -> pd.DataFrame:
         sy = self.system
         # a view of the run's array (copy-on-write keeps it safe): not a second copy
-        return pd.DataFrame(self.X[:, :sy.n], index=self.index, columns=sy.asm.dof_names,
-                            copy=False)
+        Q = self.X[:, :sy.n] if self.Q is None else self.Q
+        return pd.DataFrame(Q, index=self.index, columns=sy.asm.dof_names, copy=False)
 
     def v(self) -> pd.DataFrame:
         sy = self.system

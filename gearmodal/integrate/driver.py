@@ -35,17 +35,36 @@ class Method:
     a method that takes them (``takes_loads``) follows them between output times, the others
     get them folded into ``F`` at the output times (Newmark: its steps). ``peaks``: a
     :class:`~gearmodal.integrate.peaks.PeakTracker` for the exact peaks (``t0``: the run's
-    time at the call's start), which a method without them marks sampled."""
+    time at the call's start), which a method without them marks sampled.
+
+    ``k_org``: the call continues a run at its output step ``k_org`` (``t0 = k_org dt``):
+    ``azimuth0`` and the loads' times are then from the run's start, and so are the events'
+    times returned. A method that ``chains`` walks the pieces one call would (the exact
+    method); the others are given times from the call's start."""
 
     name = ""
     options: tuple[str, ...] = ()
     takes_loads = False
     takes_peaks = False
+    chains = False
     _run = None
 
     def run(self, system: PiecewiseLinearSystem, dt: float, n_steps: int, F: np.ndarray,
             x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0, loads=None, peaks=None,
-            t0: float = 0.0, **options):
+            t0: float = 0.0, k_org: int | None = None, **options):
+        if k_org is not None:
+            if self.chains:
+                options = {**options, "k_org": k_org}
+            else:  # times from the call's start, the events' back from the run's
+                t_org = k_org * dt
+                if loads is not None:
+                    loads = (np.asarray(loads[0], dtype=float) - t_org,) + tuple(loads[1:])
+                X, S, ev, st = self.run(system, dt, n_steps, F, x0, s0,
+                                        azimuth0 + system.omega * t_org, loads, peaks, t0,
+                                        **options)
+                ev = event_rows(ev)
+                ev[:, 0] += t_org
+                return X, S, ev, st
         if self.takes_peaks:
             options = {**options, "peaks": peaks, "t0": t0}
         elif peaks is not None:
@@ -77,6 +96,7 @@ class Exact(Method):
     options = ("max_events_per_step", "propagator")
     takes_loads = True
     takes_peaks = True
+    chains = True
     _run = staticmethod(run_exact)
 
 
@@ -163,11 +183,14 @@ class Driver:
     sink : a :class:`~.record.Recorder` the output rows and events go to as the run goes
         (then the driver keeps none of them: :meth:`arrays` has no rows); ``None``: kept.
     turning_points : also the exact turning points (:mod:`.turns`; with ``peak_bin``).
+    chained : the calls of :meth:`advance` are one run (:class:`~.stepper.Stepper`): the
+        azimuth and the loads' times given from the run's start, and the exact method walks
+        the pieces one call would (:class:`Method`'s ``k_org``).
     """
 
     def __init__(self, name: str, dt: float, x0: np.ndarray, s0: np.ndarray,
                  peak_bin: float | None = PEAK_BIN, sink=None, turning_points: bool = True,
-                 **options):
+                 chained: bool = False, **options):
         self.method = get_method(name, options)
         self.options = options
         self.dt = float(dt)
@@ -183,6 +206,7 @@ class Driver:
         self.turning_points = bool(turning_points)
         self.peaks: PeakTracker | None = None  # made with the first system
         self.sink = sink
+        self.chained = bool(chained)
         self.n_events = 0
 
     def reserve(self, n_steps: int) -> None:
@@ -206,9 +230,12 @@ class Driver:
             self.peaks = PeakTracker(system, self.peak_bin, turns=self.turning_points)
         X, S, ev, st = self.method.run(system, self.dt, n_steps, F, self.x, self.s,
                                        azimuth0=azimuth0, loads=loads, peaks=self.peaks,
-                                       t0=self.k * self.dt, **self.options)
+                                       t0=self.k * self.dt,
+                                       k_org=self.k if self.chained else None,
+                                       **self.options)
         ev = event_rows(ev)
-        ev[:, 0] += self.k * self.dt
+        if not self.chained:
+            ev[:, 0] += self.k * self.dt
         self._event(ev)
         if self.peaks is not None:
             self.peaks.turns.drain(self.sink)

@@ -128,7 +128,7 @@ def _check_finite(X: np.ndarray, dt: float) -> None:
 def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
               x0: np.ndarray, s0: np.ndarray, max_events_per_step: int = 200,
               propagator: str = "taylor", azimuth0: float = 0.0, loads=None, peaks=None,
-              t0: float = 0.0):
+              t0: float = 0.0, k_org: int | None = None):
     """Integrate ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
 
     ``F_grid`` (n_steps + 1, n) is the generalised force at the output times (linear in
@@ -157,6 +157,11 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     ``peaks``: a :class:`~gearmodal.integrate.peaks.PeakTracker` the Taylor propagator
     accumulates the exact peaks in (``t0``: the run's time at this call's start, s); ``"expm"``
     marks it sampled (``peaks.exact = False``).
+
+    ``k_org``: the call continues a run at its output step ``k_org``
+    (:class:`~gearmodal.integrate.driver.Method`): ``azimuth0`` and the loads' times from the
+    run's start, and the events' times returned; the Taylor propagator walks the pieces one
+    call would.
     """
     system.asm.require_piecewise_linear("method='exact'")
     if propagator not in PROPAGATORS:
@@ -178,6 +183,15 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     if integ is None:
         kind = TaylorIntegrator if propagator == "taylor" else ExactIntegrator
         integ = cache[key] = kind(system, dt, max_events_per_step)
+    if k_org is not None and propagator != "taylor":  # times from the call's start
+        t_org = k_org * dt
+        if loads is not None:
+            loads = (np.asarray(loads[0], dtype=float) - t_org,) + tuple(loads[1:])
+        X, S, events, stats = run_exact(system, dt, n_steps, F_grid, x0, s0,
+                                        max_events_per_step, propagator,
+                                        azimuth0 + system.omega * t_org, loads, peaks, t0)
+        events = [(te + t_org, *rest) for te, *rest in events]
+        return X, S, events, stats
     if peaks is not None and propagator != "taylor":
         peaks.exact = False
     if loads is not None and propagator != "taylor":
@@ -185,7 +199,7 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         loads = None
     F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))  # input basis, if any
     if propagator == "taylor":
-        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0, loads, peaks, t0)
+        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0, loads, peaks, t0, k_org)
         _check_finite(X, dt)
         return X, S, events, {"exponentials": 0, **integ.counts}
     prop = integ.prop

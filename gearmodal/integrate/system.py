@@ -57,10 +57,16 @@ class PiecewiseLinearSystem:
     spectral_bound : the ``rho_bound`` of a system that differs from this one only in its speed
         terms (1/s), reused with a small margin instead of computing a new bound.
     state_bound : that system's ``state_bound`` (per contact state), reused likewise.
+    grounded : ``(dof, stiffness, damping)`` springs from coordinates to ground (N/m or N m/rad,
+        N s/m or N m s/rad): the spring-damper through which a co-simulation host drives a
+        shaft (:class:`~gearmodal.integrate.stepper.Drive`). On a coordinate about a wheel's
+        own axis it is the same in every frame, so a turning system holds it in its constant
+        part.
     """
 
     def __init__(self, asm: Assembly, speed_rpm: float = 0.0, inputs: np.ndarray | None = None,
-                 geometry=None, spectral_bound: float | None = None, state_bound=None):
+                 geometry=None, spectral_bound: float | None = None, state_bound=None,
+                 grounded: tuple = ()):
         self.asm = asm
         # a bound of the spectral radius known from a system that differs from this one only
         # in its speed terms (the turbine's re-basing): the Taylor integrator takes it with a
@@ -107,7 +113,16 @@ class PiecewiseLinearSystem:
                 W, off = const["contacts.W"], const["contacts.offset"]
         self.K0 = K + om**2 * asm.K_cent
         self.C0 = C + om * asm.G
-        self.C_extra = None  # add_damping
+        self.C_extra = None  # add_damping, grounded
+        self.K_extra = None  # grounded
+        for dof, kg, cg in grounded:
+            if self.K_extra is None:
+                self.K_extra, self.C_extra = np.zeros((n, n)), np.zeros((n, n))
+            self.K_extra[dof, dof] += kg
+            self.C_extra[dof, dof] += cg
+        if self.K_extra is not None:
+            self.K0 = self.K0 + self.K_extra
+            self.C0 = self.C0 + self.C_extra
         self.f_const = om**2 * asm.f_cent
         c = asm.contacts
         self.W = np.ascontiguousarray(W)
@@ -194,9 +209,12 @@ class PiecewiseLinearSystem:
         v = self.geometry._values(float(azimuth))
         om = self.omega
         C0 = v["C"] + om * self.asm.G
+        K0 = v["K"] + om**2 * self.asm.K_cent
         if self.C_extra is not None:
             C0 = C0 + self.C_extra
-        return {"K0": v["K"] + om**2 * self.asm.K_cent, "C0": C0,
+        if self.K_extra is not None:
+            K0 = K0 + self.K_extra
+        return {"K0": K0, "C0": C0,
                 "W": v["contacts.W"], "offset": v["contacts.offset"], "B": v["B"]}
 
     def set_inputs(self, inputs: np.ndarray) -> None:

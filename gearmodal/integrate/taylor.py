@@ -1232,7 +1232,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT,
                reach, per_state, Ksym, Wl, km, c0, kappa, rho_keys, rho_vals, TL, FL, MinvUL,
                GTL, HX, HNU, track, EP, PB, pbin, PC, PM, PN, t_call, sptr, sidx, sval, sk,
-               sc, chp, TCH, TCW, TS, TP, ntp):
+               sc, chp, TCH, TCW, TS, TP, ntp, k_org, carry, MKC_in, acc_in):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -1284,6 +1284,14 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     (:func:`_track_turns`), each channel's state in ``TS``, appended to ``TP`` (time, channel,
     value) from row ``ntp``; the call returns ``(status, k, n_ev, contact, EV, TP, ntp)``
     (``TP`` a larger array than the one passed if it ran full).
+
+    A run advanced over several calls (:class:`~gearmodal.integrate.stepper.Stepper`): row
+    ``j`` of ``F``, ``X``, ``S`` is at time ``(j + k_org) dt`` and every time (``TL``,
+    ``sched_t``, events, peaks and turning points; ``t_call`` then 0) is from the run's start,
+    the input azimuth ``psi0 + om t``; ``carry`` (7,) holds what the last call left (``carry[0]
+    > 0``: ``MKC_in``, ``acc_in`` are its state matrices, then its refresh count, dense flag,
+    lazy-bound flag and count, piece limit and term scale) and is written at the end, so that
+    the calls walk the pieces one call would. The call returns ``MKC``, ``acc`` last.
     """
     N = x.shape[0]
     n = N // 2
@@ -1315,6 +1323,11 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     MKC[i, o + nT + c] = -ZC[hh, i, c].imag
             o += 2 * nT
     acc = np.empty(n)
+    carried = (carry.shape[0] >= 7 and carry[0] > 0.0 and MKC_in.shape[0] == n
+               and MKC_in.shape[1] == MKC.shape[1] and acc_in.shape[0] == n)
+    if carried:
+        MKC = MKC_in
+        acc = acc_in
     n_terms = terms[terms.shape[0] - 1]
     B = np.empty((n_terms, n))
     q = x[:n].copy()
@@ -1387,7 +1400,6 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     taus = np.empty(2 * n_terms)
     n_turn = TS.shape[0]  # channels: the contact channels, then the spring channels
     turn_room = n_turn * (2 * n_terms + 2)  # the most points one piece can add
-    _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
     toggled = 0
     dense = False
     cap = EV.shape[0]
@@ -1395,10 +1407,19 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     h_all = h_max
     pending = False
     survived = 0
-    if per_state:
-        rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
-        h_max = reach / rs if rs > 0.0 else h_all
-        tscale = TERM_BINS * rs / reach
+    if carried:  # where the last call left off
+        toggled = int(carry[1])
+        dense = carry[2] > 0.0
+        pending = carry[3] > 0.0
+        survived = int(carry[4])
+        h_max = carry[5]
+        tscale = carry[6]
+    else:
+        _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+        if per_state:
+            rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
+            h_max = reach / rs if rs > 0.0 else h_all
+            tscale = TERM_BINS * rs / reach
     k = k0
     ip = sched_pos[0]
     n_sched = sched_t.shape[0]
@@ -1406,8 +1427,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
         # the output steps from k on whose forces lie on one line: one stretch of pieces (the
         # force has no kink inside it), outputs read off the pieces' series
         k2 = _stretch(F, k, n_steps)
-        tk = k * dt
-        t_end = k2 * dt
+        tk = (k + k_org) * dt
+        t_end = (k2 + k_org) * dt
         jn = k + 1  # the next output time to write
         # M^-1 F at the stretch start and its rate (first-order hold), once per stretch: the
         # rate from the stretch's ends, so that the force (and the solution) does not depend
@@ -1683,12 +1704,12 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 if il + 2 < nk and TL[il + 1] - t < simultaneous:
                     t = max(t, TL[il + 1])  # exactly at the load knot
                 # the output times this piece passed: from its series (its end: the end state)
-                while jn <= k2 and jn * dt < t - 1e-13 * dt:
-                    _evaluate(Bv, (jn * dt - t_old) / h, h, qo, vo)
+                while jn <= k2 and (jn + k_org) * dt < t - 1e-13 * dt:
+                    _evaluate(Bv, ((jn + k_org) * dt - t_old) / h, h, qo, vo)
                     _write(X, S, jn, qo, vo, s)
                     jn += 1
                     count = 0
-                if jn <= k2 and jn * dt <= t + 1e-13 * dt:
+                if jn <= k2 and (jn + k_org) * dt <= t + 1e-13 * dt:
                     _write(X, S, jn, qb, vb, s)
                     jn += 1
                     count = 0
@@ -1722,8 +1743,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                                    TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_, pe_,
                                    pwork, stk)
                 jumped[:] = False
-            while jn <= k2 and jn * dt < t_ev - 1e-13 * dt:  # outputs before the event
-                _evaluate(Bv, (jn * dt - t) / h, h, qo, vo)
+            while jn <= k2 and (jn + k_org) * dt < t_ev - 1e-13 * dt:  # outputs before the event
+                _evaluate(Bv, ((jn + k_org) * dt - t) / h, h, qo, vo)
                 _write(X, S, jn, qo, vo, s)
                 jn += 1
                 count = 0
@@ -1798,12 +1819,12 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 x[:n] = q
                 x[n:] = v
                 sched_pos[0] = ip
-                return 2, jn - 1, n_ev, last, EV, TP, ntp
+                return 2, jn - 1, n_ev, last, EV, TP, ntp, MKC, acc
             if toggled >= REFRESH:  # rounding of the updates, rebuilt from scratch
                 _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
                 toggled = 0
             # an output time at the event: the state after it
-            while jn <= k2 and jn * dt <= t + 1e-13 * dt:
+            while jn <= k2 and (jn + k_org) * dt <= t + 1e-13 * dt:
                 _write(X, S, jn, q, v, s)
                 jn += 1
                 count = 0
@@ -1817,7 +1838,15 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     x[:n] = q
     x[n:] = v
     sched_pos[0] = ip
-    return 0, k, n_ev, -1, EV, TP, ntp
+    if carry.shape[0] >= 7:
+        carry[0] = 1.0
+        carry[1] = toggled
+        carry[2] = 1.0 if dense else 0.0
+        carry[3] = 1.0 if pending else 0.0
+        carry[4] = survived
+        carry[5] = h_max
+        carry[6] = tscale
+    return 0, k, n_ev, -1, EV, TP, ntp, MKC, acc
 
 
 def radius_bound(k: float, c: float) -> float:
@@ -2064,17 +2093,33 @@ class TaylorIntegrator:
                         pr.TOFF, pr.TU, np.ascontiguousarray(GT))
 
     def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray,
-            azimuth0: float = 0.0, loads=None, peaks=None, t0: float = 0.0):
+            azimuth0: float = 0.0, loads=None, peaks=None, t0: float = 0.0,
+            k_org: int | None = None):
         """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`); the input
         azimuth at the start is ``azimuth0`` (rad: alternating mesh stiffness, turning
         geometry); ``loads``: ``(knot_t, knot_u, harmonic_u, harmonic_nu, basis)`` added to
         ``F`` (:meth:`_loads`); ``peaks``: a :class:`~gearmodal.integrate.peaks.PeakTracker`
         the exact peaks accumulate in (times from ``t0``, the run's time at this call's
-        start, s). Events are rows of 8 (:func:`taylor_run`)."""
+        start, s). Events are rows of 8 (:func:`taylor_run`).
+
+        ``k_org``: this call continues the last one from its output step ``k_org``
+        (:class:`~gearmodal.integrate.stepper.Stepper`): times from the run's start (the
+        knots' too, and the events'), ``azimuth0`` the azimuth at the run's start, the
+        kernel's state where the last call left it, so that a run chopped into calls walks the
+        pieces of one call; None: a call of its own (times from its start)."""
         sysm = self.sys
+        last = getattr(self, "_carry", None)  # (k, s, arrays) where the last call ended
+        chained = (k_org is not None and last is not None and last[0] == k_org
+                   and np.array_equal(last[1], s0))
+        t_org = 0.0 if k_org is None else k_org * self.dt
         TL, FL, MinvUL, GTL, HX, HNU = self._loads(loads, azimuth0)
-        kc = np.array(sysm.stiffness_at(azimuth0), dtype=float)  # changed in place by events
-        sched = sysm.schedule(azimuth0, n_steps * self.dt)
+        if chained:
+            kc = self._kc  # as the last call left it (its stiffness changes applied)
+        else:
+            kc = np.array(sysm.stiffness_at(azimuth0 + sysm.omega * t_org), dtype=float)
+        sched = sysm.schedule(azimuth0 + sysm.omega * t_org, n_steps * self.dt)
+        if k_org is not None and len(sched[0]):  # from the run's start (rounded: alternating)
+            sched = (sched[0] + t_org,) + tuple(sched[1:])
         sched_pos = np.zeros(1, dtype=np.int64)
         X = np.empty((n_steps + 1, 2 * sysm.n))
         S = np.empty((n_steps + 1, sysm.n_contacts), dtype=bool)
@@ -2102,14 +2147,25 @@ class TaylorIntegrator:
         # the tie window (kernels.SIMULTANEOUS): on the system's time scale, the piece length
         # of the bound over every state, at most the call's span (a system with no stiffness
         # has rho = 0: its time scale is unbounded)
-        tie = SIMULTANEOUS * min(self.h_max, n_steps * self.dt)
-        status, k, n_ev, contact, EV, TP, ntp = taylor_run(
+        tie = SIMULTANEOUS * min(self.h_max, n_steps * self.dt if k_org is None else 1.0)
+        if k_org is None:
+            carry, MKC, acc = np.zeros(0), np.zeros((0, 0)), np.zeros(0)
+        elif chained:
+            carry, MKC, acc = last[2]
+        else:
+            carry, MKC, acc = np.zeros(7), np.zeros((0, 0)), np.zeros(0)
+        status, k, n_ev, contact, EV, TP, ntp, MKC, acc = taylor_run(
             self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
             sysm.c, sysm.offset, self.MinvU, F, x, s, k, n_steps, self.dt, self.h_max,
             self.terms, self.tscale, GRAZE_MARGIN, tie, self.max_events, X, S, EV, n_ev,
             counts, *sched, sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
-            *self.state_bound.args(), TL, FL, MinvUL, GTL, HX, HNU, *track, float(t0), *rows,
-            *turns)
+            *self.state_bound.args(), TL, FL, MinvUL, GTL, HX, HNU, *track,
+            float(t0) if k_org is None else 0.0, *rows, *turns,
+            0 if k_org is None else int(k_org), carry, MKC, acc)
+        if k_org is not None:
+            self._carry = ((k_org + n_steps, S[-1].copy(), (carry, MKC, acc)) if status == 0
+                           else None)
+            self._kc = kc
         if peaks is not None:
             peaks.turns.update(TP, ntp)
         if status != 0:

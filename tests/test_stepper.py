@@ -1,0 +1,188 @@
+"""The public stepping API (gm.Stepper): a run chopped into calls is the run of one call."""
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import gearmodal as gm
+
+RATIO = 1 + 99 / 21  # the clearance stage's sun per carrier speed
+
+
+@pytest.fixture(scope="module")
+def stage():
+    return gm.load("studies/models/planetary_clearance.toml")
+
+
+@pytest.fixture(scope="module")
+def pair():
+    return gm.load("studies/models/gear_pair.toml")
+
+
+def _chunks(seed: int, n_steps: int, n_calls: int) -> np.ndarray:
+    """Random call ends (output steps), the run's end last."""
+    rng = np.random.default_rng(seed)
+    ends = np.sort(rng.choice(np.arange(1, n_steps), n_calls - 1, replace=False))
+    return np.append(ends, n_steps)
+
+
+def _stage_loads(t):
+    """Carrier torque, its sun reaction and a shaft-end force, varying (so that every call
+    end is a kink of the loads: one call has a knot there too)."""
+    tc = 2e5 * (1 + 0.5 * np.sin(2 * math.pi * 7 * t))
+    return {"carrier.torque": tc, "sun.torque": -tc / RATIO,
+            "carrier.force_x": 2e5 * np.cos(30 * t)}
+
+
+@pytest.mark.parametrize("rpm", [600.0, -600.0])
+def test_chunked_run_is_one_call(stage, rpm):
+    """The clearance stage at +-600 rpm (turning geometry, double contact) advanced in 16
+    random calls with ramped loads: the same pieces, events, states, exact peaks and turning
+    points as one gm.simulate call with the loads as Series knotted at the call ends, to the
+    bit (the kernel carries its state across calls and keeps times from the run's start)."""
+    dt, n = 1e-4, 2000
+    ends = _chunks(1, n, 16)
+    tk = np.append(0, ends) * dt
+    series = {k: pd.Series(v, index=tk) for k, v in _stage_loads(tk).items()}
+    one = gm.simulate(stage, n * dt, dt=dt, loads=series, speed_rpm=rpm)
+    st = gm.Stepper(stage, dt=dt, speed_rpm=rpm,
+                    loads={k: float(v.iloc[0]) for k, v in series.items()})
+    for j, k in enumerate(ends):
+        st.advance(k * dt, {name: float(v.iloc[j + 1]) for name, v in series.items()})
+    chunked = st.result()
+    assert len(one.events) > 1000  # a contact-rich run: the test has something to show
+    assert chunked.stats["pieces"] == one.stats["pieces"]
+    pd.testing.assert_frame_equal(chunked.events, one.events, check_exact=True)
+    np.testing.assert_array_equal(chunked.q.to_numpy(), one.q.to_numpy())
+    np.testing.assert_array_equal(chunked.v.to_numpy(), one.v.to_numpy())
+    pd.testing.assert_frame_equal(chunked.peak_bins, one.peak_bins, check_exact=True)
+    pd.testing.assert_frame_equal(chunked.turning_points, one.turning_points,
+                                  check_exact=True)
+
+
+def test_outputs_and_state_at_call_end(stage):
+    """advance returns the named outputs at the call's end: the result's own rows there (the
+    force of one row formed alone rounds apart from the table's: 1e-13)."""
+    st = gm.Stepper(stage, dt=1e-4, speed_rpm=300.0,
+                    loads={"carrier.torque": 1e5, "sun.torque": -1e5 / RATIO},
+                    outputs=["sun_planet1.front", "carrier.theta.velocity", "sun.theta"])
+    out = st.advance(0.01)
+    assert list(out) == ["sun_planet1.front", "carrier.theta.velocity", "sun.theta"]
+    res = st.result()
+    assert out["sun_planet1.front"] == pytest.approx(res.forces["sun_planet1.front"].iloc[-1],
+                                                     rel=1e-13)
+    assert out["carrier.theta.velocity"] == res.v["carrier.theta"].iloc[-1]
+    q, v = st.state
+    assert q["sun.theta"] == out["sun.theta"] and st.time == pytest.approx(0.01, abs=0)
+    assert st.contact_state.dtype == bool
+
+
+def test_hold_is_a_constant_load(pair):
+    """hold="hold": the values given act over the whole call: one call is gm.simulate with
+    those constant loads, to the bit."""
+    loads = {"pinion.torque": 5.0, "wheel.torque": -8.0}
+    one = gm.simulate(pair, 0.02, dt=1e-4, loads={k: pd.Series([v, v], index=[0.0, 0.02])
+                                                   for k, v in loads.items()})
+    st = gm.Stepper(pair, dt=1e-4, loads=dict.fromkeys(loads, 0.0))
+    st.advance(0.02, loads, hold="hold")
+    res = st.result()
+    pd.testing.assert_frame_equal(res.events, one.events, check_exact=True)
+    np.testing.assert_array_equal(res.q.to_numpy(), one.q.to_numpy())
+
+
+def test_drive_ten_thousand_revolutions(pair):
+    """A host's shaft turning 10 027 revolutions drives the pinion through a spring: the
+    stepper moves the rigid rotation out of its state (no caller-side re-basing), angles stay
+    absolute, and the forces are those of the same run with the shaft at rest (rotation
+    changes no force; to 1e-8, the host's own rounding of 63 000 rad at the spring's
+    stiffness); the drive torque balances the wheel's load torque at the speed ratio."""
+    w, t_end, n_calls = 6000.0, 10.5, 1050  # rad/s, s
+    k_d, c_d, load = 2e3, 0.5, -20.0
+    runs = {}
+    for speed in (0.0, w):
+        st = gm.Stepper(pair, dt=1e-3, loads={"wheel.torque": load},
+                        v0={"pinion.theta": speed, "wheel.theta": -0.5 * speed},
+                        drive=gm.Drive("pinion.theta", k_d, c_d, angle0=0.0, speed0=speed))
+        for k in range(1, n_calls + 1):
+            t = k * t_end / n_calls
+            out = st.advance(t, drive_angle=speed * t, drive_speed=speed)
+        runs[speed] = (st.result(), out)
+    (rest, o0), (turning, o1) = runs[0.0], runs[w]
+    assert turning.stats["n_rebases"] > 1000 and rest.stats["n_rebases"] == 0
+    # absolute angles: the shaft's 63 000 rad less the spring's twist
+    twist = o1["drive.torque"] / k_d
+    assert o1["pinion.theta"] == pytest.approx(w * t_end - twist, abs=1e-9)
+    assert turning.q["pinion.theta"].iloc[-1] == o1["pinion.theta"]
+    fa, fb = rest.forces.to_numpy(), turning.forces.to_numpy()
+    assert np.abs(fa - fb).max() <= 1e-8 * np.abs(fa).max()
+    # the wheel's -20 N m acts on the pinion as -20 x (-0.5) = 10 N m (the wheel turns at
+    # -0.5 times the pinion): the drive holds it with -10 N m
+    assert o0["drive.torque"] == pytest.approx(load * 0.5, rel=1e-9)
+    assert o1["drive.torque"] == pytest.approx(load * 0.5, rel=1e-8)
+
+
+def test_streamed_equals_held(stage, tmp_path):
+    """out=DIR streams the rows as the calls go: the same tables as a run held in memory."""
+    kw = dict(dt=1e-4, speed_rpm=600.0, loads={"carrier.torque": 1e5, "sun.torque": -1.7e4})
+    a, b = gm.Stepper(stage, **kw), gm.Stepper(stage, out=tmp_path / "run", **kw)
+    for t in (0.004, 0.01, 0.013):
+        a.advance(t, {"carrier.torque": 1e5 + 1e7 * t})
+        b.advance(t, {"carrier.torque": 1e5 + 1e7 * t})
+    ra, rb = a.result(), b.result()
+    np.testing.assert_array_equal(ra.forces.to_numpy(), rb.forces.to_numpy())
+    pd.testing.assert_frame_equal(ra.events, rb.events, check_exact=True)
+    back = gm.SimulationResult.load(tmp_path / "run")
+    np.testing.assert_array_equal(back.q.to_numpy(), ra.q.to_numpy())
+
+
+def test_newmark_chunks_keep_run_times(pair):
+    """A method that does not chain (Newmark) is given times from the call's start: its
+    events are logged at the run's times and its loads follow the ramp."""
+    kw = dict(dt=1e-4, loads={"pinion.torque": 0.0}, method="newmark",
+              v0={"pinion.theta": 1.0})
+    one, two = gm.Stepper(pair, **kw), gm.Stepper(pair, **kw)
+    one.advance(0.02, {"pinion.torque": 2.0})
+    two.advance(0.01, {"pinion.torque": 1.0})
+    two.advance(0.02, {"pinion.torque": 2.0})
+    ea, eb = one.result().events, two.result().events
+    assert len(ea) == len(eb) > 2
+    np.testing.assert_allclose(eb["time"], ea["time"], rtol=0, atol=1e-12)
+
+
+def test_record_false_keeps_nothing(pair):
+    st = gm.Stepper(pair, dt=1e-4, loads={"pinion.torque": 1.0}, record=False)
+    out = st.advance(0.01)
+    assert math.isfinite(out["mesh.front"])
+    with pytest.raises(gm.ModelError, match="record"):
+        st.result()
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda st: st.advance(0.00015), "whole number of output steps"),
+    (lambda st: st.advance(-1.0), "after the time reached"),
+    (lambda st: st.advance(0.001, {"wheel.torque": 1.0}), "wheel.torque"),
+    (lambda st: st.advance(0.001, hold="zoh"), "hold"),
+    (lambda st: st.result(), "nothing was run"),
+])
+def test_bad_calls(pair, call, match):
+    st = gm.Stepper(pair, dt=1e-4, loads={"pinion.torque": 1.0})
+    with pytest.raises(gm.ModelError, match=match):
+        call(st)
+
+
+def test_bad_construction(pair):
+    with pytest.raises(gm.ModelError, match="outputs.nope"):
+        gm.Stepper(pair, dt=1e-4, outputs=["nope"])
+    with pytest.raises(gm.ModelError, match="drive.dof"):
+        gm.Stepper(pair, dt=1e-4, drive=gm.Drive("pinion.x", 1e3))
+    with pytest.raises(gm.ModelError, match="drive.stiffness"):
+        gm.Stepper(pair, dt=1e-4, drive=gm.Drive("pinion.theta", -1.0))
+    with pytest.raises(gm.ModelError, match="loads.nope"):
+        gm.Stepper(pair, dt=1e-4, loads={"nope": 1.0})
+    st = gm.Stepper(pair, dt=1e-4, loads={"pinion.torque": 1.0})
+    st.advance(0.001)
+    st.result()
+    with pytest.raises(gm.ModelError, match="finished"):
+        st.advance(0.002)
