@@ -162,10 +162,9 @@ def test_result_dir_parameter(tmp_path):
     (["--out", "x.fmu", "--output", "nope"], "outputs.nope"),
     (["--out", "x.fmu", "--drive", "pinion.theta"], "--drive-stiffness"),
 ])
-def test_bad_arguments(tmp_path, capsys, args, match):
-    os.chdir(tmp_path)  # (x.fmu would be written here)
-    model = os.path.join(os.path.dirname(__file__), "..", "studies", "models",
-                         "gear_pair.toml")
+def test_bad_arguments(tmp_path, capsys, monkeypatch, args, match):
+    model = os.path.abspath("studies/models/gear_pair.toml")
+    monkeypatch.chdir(tmp_path)  # (x.fmu would be written here)
     assert main(["fmu", model, *args]) == 2
     assert match in capsys.readouterr().err
     assert not os.path.exists("x.fmu")
