@@ -317,7 +317,8 @@ def cmd_fmu(args) -> int:
                  "damping": args.drive_damping}
     out = export_fmu(_named(args.model, "models"), args.fmu_out, inputs=args.input,
                      outputs=args.output, drive=drive, dt=args.dt,
-                     speed_rpm=args.speed_rpm, method=args.method)
+                     speed_rpm=args.speed_rpm, method=args.method, reference=args.reference,
+                     rebase_dt=args.rebase_dt)
     print(f"wrote {out}")
     return 0
 
@@ -446,6 +447,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="input speed, rpm (the parameter's start value; default 0)")
     f.add_argument("--method", default="exact", choices=("exact", "newmark", "scipy"),
                    help="integration method (default exact)")
+    f.add_argument("--reference", default="fixed", choices=("fixed", "follow"),
+                   help="the reference rotation: fixed at --speed-rpm (default), or follow "
+                        "the drivetrain (a host driving a planetary stage at a varying "
+                        "speed; gm.Stepper)")
+    f.add_argument("--rebase-dt", type=float, dest="rebase_dt", metavar="S",
+                   help="with --reference follow: re-base every S seconds (default: at "
+                        "every communication step)")
     f.set_defaults(func=cmd_fmu)
     i = sub.add_parser("info", help="model summary and DOF names")
     i.add_argument("model")

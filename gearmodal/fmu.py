@@ -14,7 +14,9 @@ offers by name:
   ``drive.torque`` with a drive, and every mesh flank and bearing force);
 - **parameters**: ``dt`` (the output step, s: a communication step must be a whole number of
   them), ``speed_rpm``, ``method``, ``result_dir`` (a folder the gearbox's own result streams
-  to; empty: none kept, constant memory).
+  to; empty: none kept, constant memory); the reference rotation (``--reference follow``: it
+  follows the drivetrain, as a host driving a planetary stage at a varying speed needs) is
+  fixed when the FMU is built.
 """
 
 from __future__ import annotations
@@ -53,13 +55,16 @@ def wheel_torques(model: Model) -> list[str]:
 def export_fmu(model_file, out, *, inputs: list[str] | None = None,
                outputs: list[str] | None = None, drive: dict | None = None,
                dt: float = DEFAULT_DT, speed_rpm: float = 0.0,
-               method: str = "exact") -> Path:
+               method: str = "exact", reference: str = "fixed",
+               rebase_dt: float | None = None) -> Path:
     """Build the FMU of the model in ``model_file`` at ``out`` (a ``.fmu`` path).
 
     ``inputs``: load names (default :func:`wheel_torques`); ``outputs``: stepper output names
     (module docstring); ``drive``: ``{"dof", "stiffness", "damping", "angle0", "speed0"}``
     (a :class:`~gearmodal.integrate.stepper.Drive`); ``dt``, ``speed_rpm``, ``method``: the
-    parameters' start values. Every name is checked (a :class:`ModelError` names the wrong one)
+    parameters' start values; ``reference``, ``rebase_dt``: the stepper's (``"follow"``: the
+    geometry turns with the drivetrain, for a host that drives it at a varying speed). Every
+    name is checked (a :class:`ModelError` names the wrong one)
     by making the stepper once before the FMU is written."""
     try:
         from pythonfmu import FmuBuilder
@@ -81,7 +86,8 @@ def export_fmu(model_file, out, *, inputs: list[str] | None = None,
     if drive:
         dr = Drive(drive["dof"], drive["stiffness"], drive.get("damping", 0.0))
     probe = Stepper(model, dt=dt, loads=dict.fromkeys(inputs, 0.0), drive=dr,
-                    speed_rpm=speed_rpm, method=method, record=False)
+                    speed_rpm=speed_rpm, method=method, record=False, reference=reference,
+                    rebase_dt=rebase_dt)
     if outputs is None:
         outputs = default_outputs(model, probe, inputs, dr)
     for name in outputs:
@@ -91,6 +97,7 @@ def export_fmu(model_file, out, *, inputs: list[str] | None = None,
     if not ident[0].isalpha():
         ident = "gearbox_" + ident
     cfg = {"model": src.name, "dt": dt, "speed_rpm": speed_rpm, "method": method,
+           "reference": reference, "rebase_dt": rebase_dt,
            "inputs": dict.fromkeys(inputs, 0.0), "outputs": list(outputs),
            "drive": None if not drive else {k: float(v) if k != "dof" else v
                                              for k, v in drive.items()}}

@@ -83,7 +83,9 @@ class GearboxSlave(Fmi2Slave):
         return Stepper(self.model, dt=self.dt, loads=dict(self.u), drive=drive,
                        outputs=list(self.cfg["outputs"]), method=self.method,
                        speed_rpm=self.speed_rpm, out=self.result_dir or None,
-                       record=bool(self.result_dir))
+                       record=bool(self.result_dir),
+                       reference=self.cfg.get("reference", "fixed"),
+                       rebase_dt=self.cfg.get("rebase_dt"))
 
     def exit_initialization_mode(self):
         self.stepper = self._stepper()

@@ -168,3 +168,24 @@ def test_bad_arguments(tmp_path, capsys, monkeypatch, args, match):
     assert main(["fmu", model, *args]) == 2
     assert match in capsys.readouterr().err
     assert not os.path.exists("x.fmu")
+
+
+def test_stage_driven_through_its_shaft_follows(tmp_path):
+    """The clearance stage driven through a shaft spring by a host spinning it up
+    (``--reference follow``: the geometry turns with the carrier): fmpy's run is the
+    stepper's."""
+    fmu = tmp_path / "driven.fmu"
+    assert main(["fmu", "studies/models/planetary_clearance.toml", "--out", str(fmu),
+                 "--drive", "carrier.theta", "--drive-stiffness", "5e7", "--drive-damping",
+                 "2e4", "--input", "sun.torque", "--reference", "follow"]) == 0
+    assert validate_fmu(str(fmu)) == []
+    t = np.arange(N + 1) * H
+    w = 60.0 * t / (N * H)
+    sig = np.array(list(zip(t, -1e4 * w / 60.0, np.cumsum(w) * H, w, strict=True)),
+                   dtype=[("time", float), ("sun.torque", float), ("drive.angle", float),
+                          ("drive.speed", float)])
+    model = gm.load("studies/models/planetary_clearance.toml")
+    err, outs = _compare(str(fmu), model, sig, dict(
+        dt=1e-4, drive=gm.Drive("carrier.theta", 5e7, 2e4), reference="follow"))
+    assert "drive.torque" in outs
+    assert err.max() <= 1e-9, dict(zip(outs, err, strict=True))

@@ -73,9 +73,14 @@ def test_outputs_and_state_at_call_end(stage):
     res = st.result()
     assert out["sun_planet1.front"] == pytest.approx(res.forces["sun_planet1.front"].iloc[-1],
                                                      rel=1e-13)
-    assert out["carrier.theta.velocity"] == res.v["carrier.theta"].iloc[-1]
+    # speeds and angles out are absolute: the reference rotation (300 rpm on the carrier,
+    # 300 x 5.714 on the sun) added to the state
+    om = 300.0 * math.pi / 30
+    assert out["carrier.theta.velocity"] == res.v["carrier.theta"].iloc[-1] + om
     q, v = st.state
-    assert q["sun.theta"] == out["sun.theta"] and st.time == pytest.approx(0.01, abs=0)
+    assert q["sun.theta"] == res.q["sun.theta"].iloc[-1]
+    assert out["sun.theta"] == pytest.approx(q["sun.theta"] + RATIO * om * 0.01, rel=1e-15)
+    assert st.time == pytest.approx(0.01, abs=0)
     assert st.contact_state.dtype == bool
 
 
@@ -186,3 +191,66 @@ def test_bad_construction(pair):
     st.result()
     with pytest.raises(gm.ModelError, match="finished"):
         st.advance(0.002)
+
+
+def _spin_inputs(t_end, h):
+    """A host's shaft spun up from rest to 600 rpm in 0.3 s (angle, speed on a grid of
+    ``h``), the sun's load torque rising with the speed: knots every ``h``."""
+    w_top = 600 * math.pi / 30
+    tk = np.arange(round(t_end / h) + 1) * h
+    wk = np.minimum(tk / 0.3, 1.0) * w_top
+    ak = np.where(tk <= 0.3, w_top / 0.3 * tk**2 / 2, w_top * 0.15 + w_top * (tk - 0.3))
+    return tk, wk, ak, w_top
+
+
+def _spin(stage, t_end, h_call, h_knots, **kw):
+    tk, wk, ak, w_top = _spin_inputs(t_end, h_knots)
+    st = gm.Stepper(stage, dt=1e-4, loads={"sun.torque": 0.0},
+                    drive=gm.Drive("carrier.theta", 5e7, 2e4), reference="follow", **kw)
+    for k in range(1, round(t_end / h_call) + 1):
+        t = k * h_call
+        w, a = np.interp(t, tk, wk), np.interp(t, tk, ak)
+        out = st.advance(t, {"sun.torque": -1e5 / RATIO * w / w_top}, drive_angle=a,
+                         drive_speed=w)
+    return st, out, (a, w)
+
+
+def test_follow_spins_a_stage_up_with_its_shaft(stage):
+    """reference="follow": the clearance stage driven from rest to 600 rpm through a shaft
+    spring (the host's angle and speed), its geometry turning with the carrier: the carrier
+    follows the shaft (absolute speed out), the shaft's twist is its torque over its
+    stiffness, the torque is the sun's load at the stage's ratio, and the tables hold the
+    elastic deflections (the rigid rotation taken out, as the turbine's)."""
+    st, out, (a, w) = _spin(stage, 0.4, 2e-3, 2e-3)
+    res = st.result()
+    assert res.stats["n_rebases"] > 50
+    assert out["carrier.theta.velocity"] == pytest.approx(w, rel=1e-3)
+    assert out["drive.torque"] == pytest.approx(1e5, rel=0.02)
+    assert a - out["carrier.theta"] == pytest.approx(out["drive.torque"] / 5e7, rel=0.01)
+    r = st.rigid
+    rigid = res.q.to_numpy() @ (stage.assemble().M @ r)
+    assert np.abs(rigid).max() <= 1e-11 * np.abs(res.q.to_numpy()).max()  # rounding
+
+
+def test_follow_with_rebase_dt_does_not_depend_on_the_calls(stage):
+    """With rebase_dt the reference re-bases at the same times whatever the calls: inputs on
+    the same lines advanced in calls of 4, 2 and 1 ms give the same run to rounding (the
+    extra call ends are piece ends: 1e-11)."""
+    runs = [_spin(stage, 0.2, h, 4e-3, rebase_dt=4e-3)[0].result() for h in (4e-3, 2e-3, 1e-3)]
+    ref = runs[0]
+    for r in runs[1:]:
+        assert r.stats["n_rebases"] == ref.stats["n_rebases"] == 50
+        pd.testing.assert_frame_equal(r.events[["element", "contact", "state_after"]],
+                                      ref.events[["element", "contact", "state_after"]])
+        fa, fb = ref.forces.to_numpy(), r.forces.to_numpy()
+        assert np.abs(fa - fb).max() <= 1e-10 * np.abs(fa).max()
+
+
+def test_follow_without_a_rebase_is_fixed(stage):
+    """A "follow" reference that never re-bases is the fixed one, to the bit."""
+    kw = dict(dt=1e-4, speed_rpm=600.0, loads={"carrier.torque": 1e5, "sun.torque": -1e5 / RATIO})
+    a = gm.Stepper(stage, **kw)
+    b = gm.Stepper(stage, reference="follow", rebase_speed=1e9, rebase_angle=1e9, **kw)
+    for t in (0.005, 0.012):
+        assert a.advance(t) == b.advance(t)
+    assert b.result().stats["n_rebases"] == 0

@@ -338,16 +338,18 @@ def mesh_stiffness(system: PiecewiseLinearSystem, azimuth: np.ndarray):
 
 
 def build_result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings,
-                 peaks=None, displacements=None) -> SimulationResult:
+                 peaks=None, displacements=None, velocities=None) -> SimulationResult:
     """The :class:`SimulationResult` of a run: its tables are built on first read
     (:class:`_Tables`). ``events``: (n, 6 or 8) rows or a list of tuples
     (:func:`event_array`). ``mesh_k``: :func:`mesh_stiffness` of the run. ``peaks``: the run's
     :class:`~gearmodal.integrate.peaks.PeakTracker` (the exact peaks, where it has them).
-    ``displacements``: the ``q`` table's rows when they are not the states' first half (the
-    stepper's absolute rotations; the forces still come from the states)."""
+    ``displacements``, ``velocities``: the ``q``, ``v`` tables' rows when they are not the
+    states' halves (the stepper's absolute rotations, its rigid rotation taken out; the forces
+    still come from the states)."""
     system = seg_systems[0][2]
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
-    tables = _Tables(seg_systems, t, X, S, event_array([events]), mesh_k, displacements)
+    tables = _Tables(seg_systems, t, X, S, event_array([events]), mesh_k, displacements,
+                     velocities)
     bins = turning = None
     if peaks is not None:
         bins = peak_table(peaks, system.asm.contacts.columns, float(t[-1]))
@@ -400,9 +402,9 @@ class _Tables:
     first read): ``q``, ``v``, ``forces``, ``events``, ``contact_state``."""
 
     def __init__(self, seg_systems, t, X, S, events: np.ndarray, mesh_k=None,
-                 displacements=None):
+                 displacements=None, velocities=None):
         self.seg_systems, self.t, self.X, self.S, self.ev = seg_systems, t, X, S, events
-        self.Q = displacements
+        self.Q, self.V = displacements, velocities
         self.mesh_k = mesh_k
         self.system = seg_systems[0][2]
         self._index = None
@@ -431,8 +433,8 @@ class _Tables:
 
     def v(self) -> pd.DataFrame:
         sy = self.system
-        return pd.DataFrame(self.X[:, sy.n:], index=self.index, columns=sy.asm.dof_names,
-                            copy=False)
+        V = self.X[:, sy.n:] if self.V is None else self.V
+        return pd.DataFrame(V, index=self.index, columns=sy.asm.dof_names, copy=False)
 
     def contact_state(self) -> pd.DataFrame:
         return pd.DataFrame(self.S, index=self.index, columns=self.system.names)

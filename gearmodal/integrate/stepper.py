@@ -25,14 +25,28 @@ drive one coordinate of the gearbox through a torsional spring-damper (the main 
 stiffness), ``T = k (angle - theta) + c (speed - theta')``, returned as ``drive.torque``: the
 usual two-way coupling of a drivetrain to an aeroelastic code.
 
-**Unbounded rotation.** Without a turning geometry the gearbox's rigid rotation (the one
-motion its stiffness, damping and gaps do not see) is moved out of the state into an offset
-whenever it passes :data:`REBASE_ANGLE` at a call's end: exact, since that motion changes no
-force, and it keeps the state's rounding at the size of the deflections however many turns a
-run makes. Angles in and out (``drive_angle``, a DOF's output, the result's ``q``) are
-absolute. A turning system (frames turning against each other at ``speed_rpm``) keeps its
-rotation relative to the reference rotation at ``speed_rpm`` in the state, as
-:func:`gearmodal.simulate` does.
+**The reference rotation.** The state is the deflection from a rigid reference rotation of
+the drivetrain: the input azimuth ``psi(t)``, every wheel at its ``speed_ratio`` times it.
+
+- ``reference="fixed"`` (default): ``psi = omega t`` at ``speed_rpm``, as
+  :func:`gearmodal.simulate` takes it (a run chopped into calls is then one call's run). Without
+  a turning geometry the gearbox's rigid rotation (the one motion its stiffness, damping and
+  gaps do not see) is moved out of the state into an offset whenever it passes
+  :data:`REBASE_ANGLE` at a call's end: exact, since that motion changes no force, and it keeps
+  the state's rounding at the size of the deflections however many turns a run makes.
+- ``reference="follow"``: the reference follows the drivetrain, as the turbine run's does
+  (:mod:`gearmodal.turbine.drivetrain`): at a call's end where the drivetrain's speed has left
+  the reference speed by ``rebase_speed`` of it, or its rigid rotation the reference by
+  ``rebase_angle``, the reference speed becomes the drivetrain's plus ``phi / REBASE_TAU``
+  (the azimuth stays continuous: no jump of the turning geometry), the speed terms are taken
+  at it and the velocities re-expressed against it; a contact whose state no longer matches
+  its gap switches there, logged. What a host driving a planetary stage through its shaft at a
+  varying speed needs: the geometry turns with the carrier. With ``rebase_dt`` it re-bases
+  only every ``rebase_dt`` from the start (a call is split there), so that the run does not
+  depend on where the calls end.
+
+Angles and speeds out (a rotation DOF's output) are absolute: the wheel's reference rotation
+plus its deflection.
 """
 
 from __future__ import annotations
@@ -66,6 +80,11 @@ __all__ = ["HOLDS", "REBASE_ANGLE", "Drive", "Stepper"]
 
 #: how inputs act between two calls' ends
 HOLDS = ("ramp", "hold")
+#: how the reference rotation moves (module docstring)
+REFERENCES = ("fixed", "follow")
+#: time (s) over which a re-based reference speed takes up the rigid rotation left in the state
+#: (``reference="follow"``; the turbine run's value)
+REBASE_TAU = 0.1
 #: rigid rotation (rad) beyond which a call's end moves it out of the state (module docstring)
 REBASE_ANGLE = 2 * math.pi
 #: a call's end this close to a whole number of output steps is on the grid (of ``dt``)
@@ -114,14 +133,34 @@ class Stepper:
     record : False: no rows, events or turning points are kept (:meth:`result` refused), only
         the state and the exact peaks: a host that reads the outputs alone (an FMU without a
         result directory) runs in constant memory.
+    reference : ``"fixed"`` or ``"follow"`` (module docstring); ``rebase_speed`` (relative)
+        and ``rebase_angle`` (rad): when ``"follow"`` re-bases; ``rebase_dt`` (s): where it
+        may, every ``rebase_dt`` from the start (the calls split there, their inputs linear
+        across), so that the run does not depend on the call ends; None: at every call's end
+        (then it does, at the level of the re-basing).
     """
 
     def __init__(self, model: Model, *, dt: float, loads: dict | None = None,
                  drive: Drive | None = None, outputs: list[str] | None = None,
                  method: str = "exact", speed_rpm: float = 0.0, q0: dict | None = None,
                  v0: dict | None = None, peak_bin: float | None = PEAK_BIN,
-                 turning_points: bool = True, out=None, record: bool = True, **options):
+                 turning_points: bool = True, out=None, record: bool = True,
+                 reference: str = "fixed", rebase_speed: float = 0.01,
+                 rebase_angle: float = 5e-4, rebase_dt: float | None = None, **options):
         get_method(method, options)
+        if reference not in REFERENCES:
+            raise ModelError("reference", f"= {reference!r}: must be one of "
+                             + ", ".join(map(repr, REFERENCES)))
+        self.follow = reference == "follow"
+        self.rebase_speed = _positive("rebase_speed", rebase_speed, "")
+        self.rebase_angle = _positive("rebase_angle", rebase_angle, "")
+        self.rebase_steps = 0  # "follow" re-bases at every call's end
+        if rebase_dt is not None:
+            self.rebase_steps = round(_positive("rebase_dt", rebase_dt, "") / float(dt))
+            if self.rebase_steps < 1 or abs(self.rebase_steps * dt - rebase_dt) \
+                    > GRID_TOL * rebase_dt:
+                raise ModelError("rebase_dt", f"= {rebase_dt!r}: must be a whole number of "
+                                 f"output steps dt = {dt!r} s")
         if not isinstance(model, Model):
             raise TypeError(f"expected a gm.Model, got {type(model).__name__}")
         self.dt = _positive("dt", dt, "time")
@@ -135,7 +174,9 @@ class Stepper:
         self.omega = float(speed_rpm) * 2 * math.pi / 60
         asm = model.assemble()
         self.asm = asm
-        geo = AzimuthAssembler(model) if self.omega and rotating_geometry(model) else None
+        turns = rotating_geometry(model) if (self.omega or self.follow) else False
+        geo = AzimuthAssembler(model) if turns else None
+        self.geo = geo
         names = list(asm.load_names)
         loads = dict(loads or {})
         for name, val in loads.items():
@@ -158,6 +199,9 @@ class Stepper:
         system = PiecewiseLinearSystem(asm, speed_rpm, geometry=geo, grounded=grounded)
         system.azimuth0 = 0.0
         self.system = system
+        self.grounded = grounded
+        self.ref = _Reference(self.omega)
+        self._om_rho = self.omega  # the speed of the last full spectral bound (follow)
         n = asm.n
         self.n = n
         x = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
@@ -170,25 +214,41 @@ class Stepper:
         else:
             self._basis = asm.B[:, self.columns]
             self._F = system.f_const.copy()
-        # the rigid rotation moved out of the state (module docstring): the one motion no
-        # stiffness, damping or gap sees; none on a turning system
-        self.rigid = None if system.turning else _rigid_motion(system, grounded)
+        # every rotation's reference speed per input speed (its body's speed_ratio)
+        self.ratio = np.array([self._reference_ratio(d) for d in asm.dof_names])
+        # fixed: the rigid rotation moved out of the state (module docstring), the one motion
+        # no stiffness, damping or gap sees; none on a turning system. follow: the
+        # drivetrain's rigid rotation, per input speed
+        self.rigid = None
+        if self.follow:
+            self.rigid = _rigid_motion(asm.M, asm.K, asm.C, asm.contacts.W,
+                                       asm.contacts.stiffness, damped=False)
+            if self.rigid is None:
+                raise ModelError("reference", "= 'follow' needs one free rigid rotation of the "
+                                 "drivetrain (a gearbox whose wheels turn freely together); "
+                                 "this model has none or several")
+            j = int(np.argmax(np.abs(self.rigid) * (self.ratio != 0)))
+            if self.ratio[j] == 0:
+                raise ModelError("reference", "= 'follow': the free rotation turns no wheel "
+                                 "with a speed_ratio")
+            self.rigid = self.rigid * (self.ratio[j] / self.rigid[j])
+        elif not system.turning:
+            self.rigid = _rigid_motion(asm.M, system.K0, system.C0, system.W, system.k,
+                                       grounded)
         self.offset = 0.0  # rigid rotation moved out so far, in units of ``rigid``
         self._rebases: list[tuple[int, float]] = []  # (output step, offset from then on)
         if drive is not None:
             i = self._i_drive
-            ratio = self._reference_ratio(drive.dof)
-            self._ref = ratio * self.omega  # the DOF's reference speed, rad/s
             a0 = x[i] if drive.angle0 is None else _number("drive.angle0", drive.angle0)
-            w0 = x[n + i] + self._ref if drive.speed0 is None else _number("drive.speed0",
-                                                                           drive.speed0)
+            w0 = (x[n + i] + self.ratio[i] * self.omega if drive.speed0 is None
+                  else _number("drive.speed0", drive.speed0))
             self._host = np.array([a0, w0])  # absolute
         self.sink = None
         self.record = bool(record)
         if not self.record:
             self.sink = _Discard()
         elif out is not None:
-            self.sink = Recorder(out, system, self.dt, elastic=self._absolute,
+            self.sink = Recorder(out, system, self.dt, elastic=self._tables,
                                  mesh_k=lambda sy, az: mesh_stiffness(system, az))
         self.run = Driver(method, self.dt, x, s, peak_bin=peak_bin, sink=self.sink,
                           turning_points=turning_points, chained=True, **options)
@@ -200,7 +260,10 @@ class Stepper:
                          "drive": None if drive is None else {
                              "dof": drive.dof, "stiffness": float(drive.stiffness),
                              "damping": float(drive.damping)},
-                         "stepped": True}
+                         "reference": reference, "stepped": True}
+        if self.follow:
+            self.settings.update(rebase_speed=self.rebase_speed,
+                                 rebase_angle=self.rebase_angle)
         self.output_names = (list(asm.dof_names) + [f"{d}.velocity" for d in asm.dof_names]
                              + list(self.fmap.labels)
                              + (["drive.torque"] if drive is not None else []))
@@ -249,7 +312,7 @@ class Stepper:
         if abs(k1 * self.dt - t) > GRID_TOL * max(abs(t), self.dt) or k1 <= self.run.k:
             raise ModelError("t", f"= {t!r}: must be after the time reached ({self.time!r} "
                              f"s) by a whole number of output steps dt = {self.dt!r} s")
-        k0, n_steps = self.run.k, k1 - self.run.k
+        k0 = self.run.k
         span = k1 * self.dt - k0 * self.dt
         given = self.u.copy()
         for name, val in (loads or {}).items():
@@ -269,21 +332,34 @@ class Stepper:
                 a1 = (a0 + 0.5 * (w0 + w1) * span if drive_angle is None
                       else _number("drive_angle", drive_angle))
                 host0, host1 = tuple(self._host), (a1, w1)
-        u1 = self._load_values(k1, given, host1)
-        u0 = self._load_values(k0, given if hold == "hold" else self.u, host0)
+        g0 = given if hold == "hold" else self.u  # the given loads at the call's start
         cpu = time.process_time()
-        start = u0
-        # knots at the call's ends, from the run's start (k dt: as a load Series on the same
-        # times gives them to one call)
-        timed = (np.array([k0 * self.dt, k1 * self.dt]), np.vstack([start, u1]),
-                 np.empty((0, len(u1))), np.empty(0), self._basis)
-        F = np.tile(self._F, (n_steps + 1, 1))
-        self.run.advance(self.system, n_steps, F, azimuth0=0.0, loads=timed,
-                         azimuths=self.omega * np.arange(k0, k1 + 1) * self.dt)
+        # the call's stretches: to each re-basing point of "follow" inside it, then its end
+        ends = [k1]
+        if self.follow and self.rebase_steps:
+            m = self.rebase_steps
+            ends = list(range((k0 // m + 1) * m, k1, m)) + [k1]
+        ka = k0
+        for kb in ends:
+            # the inputs linear over the call (its ends' values exactly at its ends)
+            ga, ha = _between(ka, k0, k1, g0, given), _between(ka, k0, k1, host0, host1)
+            gb, hb = _between(kb, k0, k1, g0, given), _between(kb, k0, k1, host0, host1)
+            ua, ub = self._load_values(ka, ga, ha), self._load_values(kb, gb, hb)
+            # knots at the stretch's ends, from the run's start (k dt: as a load Series on
+            # the same times gives them to one call)
+            timed = (np.array([ka * self.dt, kb * self.dt]), np.vstack([ua, ub]),
+                     np.empty((0, len(ub))), np.empty(0), self._basis)
+            F = np.tile(self._F, (kb - ka + 1, 1))
+            self.run.advance(self.system, kb - ka, F, azimuth0=self.ref.origin(), loads=timed,
+                             azimuths=self.ref.at(np.arange(ka, kb + 1) * self.dt))
+            if self.follow and (not self.rebase_steps or kb % self.rebase_steps == 0):
+                self._follow()
+            ka = kb
         self.u = given
         if host1 is not None:
             self._host = np.array(host1)
-        self._rebase()
+        if not self.follow:
+            self._rebase()
         self._cpu += time.process_time() - cpu
         return self.values()
 
@@ -291,12 +367,16 @@ class Stepper:
         """The outputs (:attr:`outputs`) at the time reached."""
         x = self.run.x
         q, qd = self._absolute(x[None, :])
-        out = dict(zip(self.asm.dof_names, q[0], strict=True))
-        out.update({f"{d}.velocity": val for d, val in zip(self.asm.dof_names, qd[0],
+        # rotations absolute: the reference rotation at each wheel's ratio added
+        q = q[0] + self.ratio * self.ref.at(self.time)
+        qd = qd[0] + self.ratio * self.ref.om_f
+        out = dict(zip(self.asm.dof_names, q, strict=True))
+        out.update({f"{d}.velocity": val for d, val in zip(self.asm.dof_names, qd,
                                                             strict=True)})
         t = self.time
-        K = mesh_stiffness(self.system, np.array([self.omega * t]))
-        f = self.fmap.rows(self.system, x[None, :], self.run.s[None, :], np.array([t]), K)
+        K = mesh_stiffness(self.system, np.array([self.ref.at(t)]))
+        f = self.fmap.rows(self.system, x[None, :], self.run.s[None, :],
+                           np.array([t - self.ref.t_f]), K)
         out.update(zip(self.fmap.labels, f[0], strict=True))
         if self.drive is not None:
             out["drive.torque"] = self._drive_torque()
@@ -304,8 +384,10 @@ class Stepper:
 
     @property
     def state(self) -> tuple[pd.Series, pd.Series]:
-        """``(q, v)`` at the time reached, by DOF name (rotations absolute)."""
-        q, qd = self._absolute(self.run.x[None, :])
+        """``(q, v)`` at the time reached, by DOF name: the result's last row (deflections from
+        the reference rotation; ``"follow"``: the rigid rotation taken out, as the turbine's
+        tables)."""
+        q, qd = self._tables(self.run.x[None, :])
         return (pd.Series(q[0], index=self.asm.dof_names, name="q"),
                 pd.Series(qd[0], index=self.asm.dof_names, name="v"))
 
@@ -327,7 +409,8 @@ class Stepper:
             raise ModelError("result", "nothing was run yet: call advance(t) first")
         run = self.run
         stats = {**run.stats, "cpu_s": self._cpu, "n_events": run.n_events,
-                 "n_steps": run.k, "n_rebases": len(self._rebases)}
+                 "n_steps": run.k,
+                 "n_rebases": len(self.ref.stretches) - 1 if self.follow else len(self._rebases)}
         t_end = run.k * self.dt
         settings = {**self.settings, "t_end": t_end}
         if self.sink is not None:
@@ -335,14 +418,17 @@ class Stepper:
                                        (0.0, t_end), peaks=run.peaks)
             return self._done
         X, S, events = run.arrays()
-        Q = None  # rotations absolute; the forces from the states (no rounding of the turns)
-        if self._rebases:
+        Q = V = None  # the tables' rows; the forces from the states (no rounding of turns)
+        if self.follow:
+            Q, V = self._tables(X)
+        elif self._rebases:
             Q = self._absolute(X, rows=np.arange(len(X)))[0]
         t = np.arange(run.k + 1) * self.dt
+        az = self.ref.grid(run.k, self.dt)
         self._done = build_result([tuple(sg) for sg in run.segments], t, X, S, events,
-                                  self.s_init, stats, mesh_stiffness(self.system,
-                                                                     self.omega * t),
-                                  settings, peaks=run.peaks, displacements=Q)
+                                  self.s_init, stats,
+                                  mesh_stiffness(run.segments[0][2] or self.system, az),
+                                  settings, peaks=run.peaks, displacements=Q, velocities=V)
         return self._done
 
     # -- bookkeeping -----------------------------------------------------------------------
@@ -367,6 +453,57 @@ class Stepper:
         raise ModelError("drive.dof", f"= {drive.dof!r}: no load acts on it alone (a torque "
                          "load such as 'carrier.torque'); drive a wheel's rotation")
 
+    def _follow(self) -> None:
+        """``reference="follow"``: re-base the reference rotation at this call's end where the
+        drivetrain has left it (module docstring; as the turbine run's re-basing)."""
+        n, r, ref = self.n, self.rigid, self.ref
+        x = self.run.x
+        Mr = self.asm.M @ r
+        J = float(r @ Mr)
+        phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
+        if not (abs(dom) > self.rebase_speed * max(abs(ref.om_f), 1e-3)
+                or abs(phi) > self.rebase_angle):
+            return
+        t = self.time
+        om_new = ref.om_f + dom + phi / REBASE_TAU
+        x = x.copy()
+        x[n:] -= r * (om_new - ref.om_f)
+        # the spectral bounds anew once the speed has moved by its own size since they last
+        # were; in between the last ones serve, with the integrator's margin (the turbine's)
+        fresh = abs(om_new - self._om_rho) > max(abs(self._om_rho), 1e-3)
+        prev = self.system
+        system = PiecewiseLinearSystem(
+            self.asm, om_new * 60 / (2 * math.pi), geometry=self.geo, grounded=self.grounded,
+            spectral_bound=None if fresh else getattr(prev, "rho_bound", None),
+            state_bound=None if fresh else getattr(prev, "state_bound", None))
+        if fresh:
+            self._om_rho = om_new
+        if system.turning:
+            system.use_loads(self.columns)
+        else:
+            self._F = system.f_const.copy()
+        ref.rebase(self.run.k, t, om_new)
+        self.system = system
+        self.run.rebase(system, x, ref.at(t))
+
+    def _tables(self, X: np.ndarray):
+        """``(q, v)`` rows of the result's tables from state rows ``X`` at the time reached
+        (``"follow"``: the rigid rotation taken out, column by column, as the turbine's
+        tables; else :meth:`_absolute`)."""
+        if not self.follow:
+            return self._absolute(X)
+        n, r = self.n, self.rigid
+        Mr = self.asm.M @ r
+        J = float(r @ Mr)
+        parts = []
+        for block in (X[:, :n], X[:, n:]):
+            phi = block @ (Mr / J)
+            e = np.array(block)
+            for j in np.flatnonzero(r):
+                e[:, j] -= r[j] * phi
+            parts.append(e)
+        return parts[0], parts[1]
+
     def _reference_ratio(self, dof: str) -> float:
         """The DOF's reference speed per input speed (its body's ``speed_ratio``), for a
         rotation; 0 for a translation."""
@@ -382,10 +519,10 @@ class Stepper:
         rotation moved out of the state so far (the spring's other end is in the state)."""
         u = given.copy()
         if host is not None:
-            d = self.drive
-            rel = host[0] - self._ref * k * self.dt - self.offset * self._rigid_i()
-            u[self.load_index[self._drive_name]] += (d.stiffness * rel
-                                                     + d.damping * (host[1] - self._ref))
+            d, rho = self.drive, self.ratio[self._i_drive]
+            rel = host[0] - rho * self.ref.at(k * self.dt) - self.offset * self._rigid_i()
+            u[self.load_index[self._drive_name]] += (
+                d.stiffness * rel + d.damping * (host[1] - rho * self.ref.om_f))
         return u
 
     def _drive_torque(self) -> float:
@@ -393,17 +530,21 @@ class Stepper:
         the turns made)."""
         d, n, i = self.drive, self.n, self._i_drive
         a, w = self._host
-        rel = a - self._ref * self.time - self.offset * self._rigid_i()
-        return d.stiffness * (rel - self.run.x[i]) + d.damping * (w - self._ref
-                                                                  - self.run.x[n + i])
+        rho = self.ratio[i]
+        rel = a - rho * self.ref.at(self.time) - self.offset * self._rigid_i()
+        return d.stiffness * (rel - self.run.x[i]) + d.damping * (
+            w - rho * self.ref.om_f - self.run.x[n + i])
 
     def _rigid_i(self) -> float:
-        return 0.0 if self.rigid is None else float(self.rigid[self._i_drive])
+        """The driven DOF's part of the rigid rotation moved out (``"fixed"``)."""
+        if self.rigid is None or self.follow:
+            return 0.0
+        return float(self.rigid[self._i_drive])
 
     def _rebase(self) -> None:
         """Move the rigid rotation out of the state at this call's end when it passed
         :data:`REBASE_ANGLE` (module docstring); the drive's load re-expressed against it."""
-        if self.rigid is None:
+        if self.rigid is None or self.follow:
             return
         n, r = self.n, self.rigid
         phi = float(self._Mr @ self.run.x[:n]) / self._J
@@ -426,7 +567,7 @@ class Stepper:
         """``(q, v)`` of state rows ``X`` with the rigid rotation moved out added back:
         ``rows`` their output steps (default: every row at the time reached)."""
         q = np.array(X[:, :self.n])
-        if self.rigid is not None and self._rebases:
+        if self.rigid is not None and self._rebases and not self.follow:
             if rows is None:
                 off = np.full(len(X), self.offset)
             else:
@@ -450,22 +591,74 @@ class _Discard:
         pass
 
 
-def _rigid_motion(system: PiecewiseLinearSystem, grounded) -> np.ndarray | None:
-    """The one motion of a frozen system that no stiffness, damping or gap sees (a free
-    drivetrain rotation), normalised to 1 on its largest rotation; None without one (or with
-    several: then nothing is moved)."""
-    K, C = system.K0.copy(), system.C0.copy()
-    for dof, kg, cg in grounded:  # the drive's own spring does see it: taken up by the drive
+class _Reference:
+    """The reference input azimuth ``psi(t) = psi_f + om_f (t - t_f)`` (rad), re-based at
+    calls' ends (``reference="follow"``); ``stretches``: ``(k, psi_f, om_f, t_f)`` from each
+    re-basing's output step on."""
+
+    def __init__(self, omega: float):
+        self.psi_f, self.om_f, self.t_f = 0.0, float(omega), 0.0
+        self.stretches = [(0, 0.0, self.om_f, 0.0)]
+
+    def at(self, t):
+        """The azimuth at time(s) ``t`` of the current stretch."""
+        return self.psi_f + self.om_f * (t - self.t_f)
+
+    def origin(self) -> float:
+        """The current stretch's azimuth extended back to time 0 (the kernel's times are the
+        run's)."""
+        return self.psi_f - self.om_f * self.t_f
+
+    def rebase(self, k: int, t: float, om: float) -> None:
+        """A new stretch from output step ``k`` (time ``t``) at speed ``om``, the azimuth
+        continuous."""
+        self.psi_f, self.t_f, self.om_f = self.at(t), t, float(om)
+        self.stretches.append((k, self.psi_f, self.om_f, self.t_f))
+
+    def grid(self, k_end: int, dt: float) -> np.ndarray:
+        """The azimuth at every output step ``0 .. k_end``."""
+        out = np.empty(k_end + 1)
+        ks = [s[0] for s in self.stretches] + [k_end + 1]
+        for (k0, psi, om, tf), k1 in zip(self.stretches, ks[1:], strict=True):
+            out[k0:k1] = psi + om * (np.arange(k0, k1) * dt - tf)
+        return out
+
+
+def _between(k: int, k0: int, k1: int, a, b):
+    """Values linear from ``a`` at step ``k0`` to ``b`` at ``k1``, at step ``k`` (the ends'
+    exactly; None stays None)."""
+    if a is None:
+        return None
+    if k == k0:
+        return np.asarray(a, dtype=float)
+    if k == k1:
+        return np.asarray(b, dtype=float)
+    f = (k - k0) / (k1 - k0)
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return a + f * (b - a)
+
+
+def _rigid_motion(M: np.ndarray, K: np.ndarray, C: np.ndarray, W: np.ndarray, k: np.ndarray,
+                  grounded=(), damped: bool = True) -> np.ndarray | None:
+    """The one free motion of stiffness ``K`` with every contact (rows ``W``, stiffness
+    ``k``) closed: a drivetrain's rigid rotation, normalised to 1 on its largest entry (the
+    eigenvector of zero eigenvalue of ``(K + W^T k W, M)``, as the turbine's
+    ``rigid_rotation``); None without one, with several, or (``damped``) when the damping ``C``
+    sees it. ``grounded``: the drive's springs in ``K``, ``C``, left out (the drive takes that
+    motion up, with the host's angle)."""
+    K, C = np.array(K, dtype=float), np.array(C, dtype=float)
+    for dof, kg, cg in grounded:
         K[dof, dof] -= kg
         C[dof, dof] -= cg
-    A = np.vstack([K, C, system.W])
-    scale = float(np.abs(A).max(initial=0.0))
-    if scale == 0.0:
+    Kc = K + (W.T * k) @ W
+    w, V = sla.eigh(Kc, M)
+    free = np.abs(w) <= 1e-10 * max(np.abs(w).max(initial=0.0), 1e-300)
+    if free.sum() != 1:
         return None
-    null = sla.null_space(A, rcond=1e-10)
-    if null.shape[1] != 1:
+    r = V[:, int(np.flatnonzero(free)[0])]
+    if damped and np.abs(C @ r).max(initial=0.0) > 1e-10 * np.abs(C).max(initial=0.0) \
+            * np.abs(r).max():
         return None
-    r = null[:, 0]
     return r / r[int(np.argmax(np.abs(r)))]
 
 
