@@ -254,3 +254,18 @@ def test_follow_without_a_rebase_is_fixed(stage):
     for t in (0.005, 0.012):
         assert a.advance(t) == b.advance(t)
     assert b.result().stats["n_rebases"] == 0
+
+
+def test_from_scene():
+    """A gearbox scene's model, step, method and initial state make the stepper; its loads'
+    values at 0 are the inputs; a turbine scene is refused."""
+    from gearmodal.scene import load_scene
+
+    scene = load_scene("studies/scenes/planetary_double_contact.toml")
+    st = gm.Stepper.from_scene(scene, outputs=["ring_planet1.front"])
+    assert st.dt == scene.dt and st.settings["method"] == scene.method
+    assert set(st.settings["loads"]) == set(scene.loads)
+    out = st.advance(10 * scene.dt)
+    assert list(out) == ["ring_planet1.front"] and math.isfinite(out["ring_planet1.front"])
+    with pytest.raises(gm.ModelError, match="scene.turbine"):
+        gm.Stepper.from_scene(load_scene("studies/scenes/600kw_turbine_10ms.toml"))

@@ -277,6 +277,36 @@ class Stepper:
         self._cpu = time.process_time() - cpu
         self._done = None
 
+    @classmethod
+    def from_scene(cls, scene, **kwargs) -> Stepper:
+        """A stepper of a gearbox scene (:func:`gearmodal.scene.load_scene`): its model,
+        ``dt``, method and options, ``speed_rpm`` and initial state (``start = "equilibrium"``
+        included); its loads' values at time 0 as the loads the host sets from then on (a
+        wave or series is the host's to follow). ``kwargs`` (``drive``, ``outputs``,
+        ``reference``...) go to the stepper and override the scene's."""
+        from ..scene import Scene
+
+        if not isinstance(scene, Scene):
+            raise TypeError(f"expected a gearmodal.scene.Scene, got {type(scene).__name__}")
+        if scene.turbine is not None:
+            raise ModelError("scene.turbine", "a turbine scene runs its own loop "
+                             "(scene.simulate()); a stepper takes a gearbox scene")
+        if scene.method == "auto":
+            raise ModelError("scene.method", "= 'auto' chooses among whole runs; give a "
+                             "method (exact, newmark, scipy) to step a scene")
+        loads = {}
+        for name, val in scene.loads.items():
+            if isinstance(val, (int, float)):
+                loads[name] = float(val)
+            elif isinstance(val, pd.Series):
+                t = np.asarray(val.index, dtype=float)
+                loads[name] = float(np.interp(0.0, t, val.to_numpy(dtype=float)))
+            else:  # a wave or another function of time
+                loads[name] = float(val(0.0))
+        args = {"dt": scene.dt, "method": scene.method, "speed_rpm": scene.speed_rpm,
+                "loads": loads, "q0": scene.initial_q(), "v0": scene.v0, **scene.options}
+        return cls(scene.model, **{**args, **kwargs})
+
     # -- the host's calls -------------------------------------------------------------------
 
     @property
