@@ -19,7 +19,7 @@ from .coupling import (
     ModelSystem,
     System,
 )
-from .errors import ModelError
+from .errors import GearmodalError, ModelError, SolveError, StoreError
 from .integrate import Harmonic, SimulationResult, simulate
 from .integrate.stepper import Drive, Stepper
 from .modal import ModalResult, modal
@@ -50,9 +50,10 @@ from .studies import sweep
 __version__ = "0.1.0"
 
 __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Constraint", "Coupled",
-           "CoupledAssembly", "Drive", "Equilibrium", "FidelityChoice", "Frame", "Joint",
-           "LinearConstraint", "LinearSystem", "ModelSystem", "System",
+           "CoupledAssembly", "Drive", "Equilibrium", "FidelityChoice", "Frame",
+           "GearmodalError", "Joint", "LinearConstraint", "LinearSystem", "ModelSystem", "System",
            "Gear", "Harmonic", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
+           "SolveError", "StoreError",
            "SimulationResult", "Stepper", "simulate",
            "assemble", "balance", "campbell", "choose_fidelity", "drivetrain", "equilibrium",
            "gear_pair",

@@ -61,7 +61,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import ModelError
+from .errors import ModelError, StoreError
 from .saved import load_run
 from .summary import summarize
 
@@ -121,7 +121,7 @@ def fingerprint(scene) -> str:
     try:
         return sc.identity()
     except (ModelError, AttributeError, TypeError) as err:
-        raise ModelError("store", "the scene cannot be fingerprinted for a resumable store "
+        raise StoreError("store", "the scene cannot be fingerprinted for a resumable store "
                          f"({type(err).__name__}: {err}); give its loads as constants, "
                          "waves or a [load_file], or run without a store") from None
 
@@ -141,12 +141,12 @@ class _Store:
         if meta.exists():
             old = json.loads(meta.read_text())
             if old.get("format") != STORE_FORMAT:
-                raise ModelError("store", f"= {str(directory)!r} was written by an older "
+                raise StoreError("store", f"= {str(directory)!r} was written by an older "
                                  f"gearmodal (format {old.get('format', 1)!r}, this one reads "
                                  f"{STORE_FORMAT!r}): use a new store or delete it")
             for key, val in ident.items():
                 if old.get(key) != val:
-                    raise ModelError("store", f"= {str(directory)!r} holds the ladder of a "
+                    raise StoreError("store", f"= {str(directory)!r} holds the ladder of a "
                                      f"different {key.replace('_', ' ')} ({old.get(key)!r}, "
                                      f"not {val!r}): use a new store or delete it")
         else:
@@ -354,7 +354,7 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
             result = _rung_scene(scene, settings).simulate()
         again = summarize(result)
         if difference(again, summaries[chosen], quantities) > 1e-12:
-            raise ModelError("store", f"= {str(store)!r}: rung {chosen} run again differs "
+            raise StoreError("store", f"= {str(store)!r}: rung {chosen} run again differs "
                              "from its stored summary (made by another gearmodal version?): "
                              "delete the store")
         if keep_all:

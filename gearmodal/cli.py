@@ -5,7 +5,8 @@ with the gearbox: see :mod:`gearmodal.scene`), ``gearmodal study NAME --out DIR`
 paper's studies in ``studies/``).
 
 Input errors (:class:`gearmodal.ModelError`, missing files) are printed as one line without a
-traceback and the exit status is 2.
+traceback and the exit status is 2; a failed solve (:class:`gearmodal.SolveError`) exits with
+4, a refused store (:class:`gearmodal.StoreError`) with 5.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from . import shipped
-from .errors import ModelError, unknown
+from .errors import ModelError, SolveError, StoreError, unknown
 from .model.validate import plausible
 
 #: the largest input speed (rpm) and number of speeds a Campbell sweep takes from the command
@@ -500,9 +501,10 @@ def _on_sigterm(signum, frame):
 
 
 def main(argv=None) -> int:
-    """The command line; returns the exit status (0 done, 2 bad input, 3 internal error, 130
-    interrupted, 143 terminated). Bad input gets one line naming the field; an internal error
-    one line and a hint (``--debug`` shows its traceback)."""
+    """The command line; returns the exit status (0 done, 2 bad input, 3 internal error, 4 the
+    solve failed, 5 a store refused, 130 interrupted, 143 terminated). Bad input gets one line
+    naming the field; an internal error one line and a hint (``--debug`` shows its
+    traceback)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     if debug:
@@ -521,6 +523,12 @@ def main(argv=None) -> int:
     except ModelError as e:
         print(f"gearmodal: error: {e}", file=sys.stderr)
         return 2
+    except SolveError as e:
+        print(f"gearmodal: the solve failed: {e}", file=sys.stderr)
+        return 4
+    except StoreError as e:
+        print(f"gearmodal: store refused: {e}", file=sys.stderr)
+        return 5
     except FileNotFoundError as e:
         print(f"gearmodal: error: {e.filename or e}: file not found", file=sys.stderr)
         return 2

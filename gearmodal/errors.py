@@ -1,14 +1,21 @@
-"""Errors raised by gearmodal.
+"""Errors raised by gearmodal, by kind, so that a caller can tell bad input from a failed solve:
 
-Every input error names the offending field, the value given and what is allowed, so that the
-CLI can print it without a traceback (``gearmodal`` exits with status 2 on a ``ModelError``).
+- :class:`ModelError` (a ``ValueError``): bad input. The message names the offending field, the
+  value given and what is allowed; the CLI prints it on one line and exits with status 2.
+- :class:`SolveError` (a ``RuntimeError``): the input was valid but the solve failed (a
+  solution that is not finite, a method that diverged, more contact events in one step than
+  allowed, a solver that gave up); the message names the setting to change. CLI status 4.
+- :class:`StoreError`: a store of results (a sweep's, the fidelity ladder's) refused: written
+  by another gearmodal, for another scene or metrics, or damaged. CLI status 5.
+
+All three are :class:`GearmodalError`, which carries ``field`` and ``message``.
 """
 
 from __future__ import annotations
 
 
-class ModelError(ValueError):
-    """Invalid model input: the message names the field, the value and the allowed range."""
+class GearmodalError(Exception):
+    """An error gearmodal reports on one line: ``field`` (what it is about) and ``message``."""
 
     def __init__(self, field: str, message: str):
         self.field = field
@@ -23,6 +30,18 @@ class ModelError(ValueError):
 
     def __reduce__(self):  # pickle by (field, message): errors cross process pools intact
         return (type(self), (self.field, self.message))
+
+
+class ModelError(GearmodalError, ValueError):
+    """Invalid input: the message names the field, the value and the allowed range."""
+
+
+class SolveError(GearmodalError, RuntimeError):
+    """A solve that failed on valid input: the message names the setting to change."""
+
+
+class StoreError(GearmodalError):
+    """A store of results that is refused (another version, scene or metrics; damaged)."""
 
 
 def unknown(kind: str, name: str, names) -> str:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Real, String
 
-from .errors import ModelError
+from .errors import GearmodalError
 from .integrate.stepper import Drive, Stepper
 from .model.toml_io import load
 
@@ -98,7 +98,7 @@ class GearboxSlave(Fmi2Slave):
         try:
             self.values = self.stepper.advance(current_time + step_size, dict(self.u),
                                                hold="hold", **kw)
-        except ModelError as e:
+        except GearmodalError as e:  # a bad input or a failed solve: the step fails
             self.log(f"gearmodal: {e}")
             return False
         return True

@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import ModelError
+from .errors import ModelError, StoreError
 from .result_io import sha256_of
 from .summary import summarize
 
@@ -307,7 +307,7 @@ def load_table(store, case_id: str, name: str) -> pd.DataFrame:
     try:
         return _read_case_file(path)
     except (OSError, ValueError) as e:
-        raise ModelError("store", f"= {str(Path(store))!r}: {path.relative_to(Path(store))} "
+        raise StoreError("store", f"= {str(Path(store))!r}: {path.relative_to(Path(store))} "
                          f"is damaged ({str(e).splitlines()[0][:160]})") from None
 
 
@@ -379,18 +379,18 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
                 if not isinstance(old, dict):
                     raise ValueError(f"a {type(old).__name__}, not a table")
             except (OSError, ValueError) as e:  # (damaged: it is written atomically)
-                raise ModelError("store", f"= {str(store)!r}: sweep.json is unreadable "
+                raise StoreError("store", f"= {str(store)!r}: sweep.json is unreadable "
                                  f"({str(e)[:120]}), so the scene its cases belong to is "
                                  "unknown: use a new store or delete it") from None
             if old.get("format") != STORE_FORMAT:
-                raise ModelError("store", f"= {str(store)!r} was written by an older gearmodal "
+                raise StoreError("store", f"= {str(store)!r} was written by an older gearmodal "
                                  f"(format {old.get('format', 1)!r}, this one reads "
                                  f"{STORE_FORMAT!r}): use a new store or delete it")
             old_id = old.get("identity", {})
             for key in ("scene_sha256", "callable", "metrics"):
                 if key in old_id and old_id[key] != ident.get(key):
                     what = "metrics" if key == "metrics" else "scene"
-                    raise ModelError("store", f"= {str(store)!r} was made with a different "
+                    raise StoreError("store", f"= {str(store)!r} was made with a different "
                                      f"{what} ({key} differs): use a new store or delete it")
         # every case this store has seen, earlier runs' first (a run on a subset keeps them)
         known = {c["case_id"]: c for c in old.get("cases", [])}

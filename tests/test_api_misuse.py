@@ -180,7 +180,7 @@ def test_a_damaged_stored_case_is_computed_again(tmp_path):
     # the store's own file damaged: which scene its cases belong to is unknown: refused
     meta = tmp_path / "sweep.json"
     meta.write_bytes(meta.read_bytes()[:40])
-    with pytest.raises(gm.ModelError, match="sweep.json is unreadable .* use a new store"):
+    with pytest.raises(gm.StoreError, match="sweep.json is unreadable .* use a new store"):
         gm.sweep(scene, grid, store=tmp_path, progress=False, max_workers=1)
 
 
@@ -249,3 +249,30 @@ def test_a_save_over_an_earlier_result_is_atomic(tmp_path, monkeypatch):
     back = gm.SimulationResult.load(tmp_path / "run")
     pd.testing.assert_frame_equal(back.q, second.q, check_exact=True)
     assert not list((tmp_path / "run").glob("*.parquet"))  # replaced whole
+
+
+def test_a_failed_solve_is_not_bad_input(tmp_path, capsys):
+    """Errors by kind: a solve that fails on valid input (more contact events in one step than
+    allowed) is a SolveError, not a ModelError (a caller can tell them apart), with its own
+    CLI exit status (4); bad input stays ModelError (2)."""
+    import math
+    from pathlib import Path
+
+    from gearmodal.cli import main
+
+    p = gm.Gear(20, 0.004, math.radians(20), mass=1.0, inertia=1e-3)
+    w = gm.Gear(40, 0.004, math.radians(20), mass=4.0, inertia=1.6e-2)
+    pair = gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-6)
+    with pytest.raises(gm.SolveError, match="max_events_per_step") as err:
+        gm.simulate(pair, 0.01, dt=1e-2, v0={"pinion.theta": 5.0}, max_events_per_step=1)
+    assert not isinstance(err.value, gm.ModelError)
+    assert isinstance(err.value, gm.GearmodalError) and err.value.field == "max_events_per_step"
+    with pytest.raises(gm.ModelError) as bad:
+        gm.simulate(pair, -1.0, dt=1e-4)
+    assert not isinstance(bad.value, gm.SolveError)
+    scene = tmp_path / "s.toml"
+    scene.write_text('[scene]\nmodel = "' + str(Path("studies/models/gear_pair.toml").resolve())
+                     + '"\nt_end = 0.01\ndt = 0.01\n[options]\nmax_events_per_step = 1\n'
+                     '[v0]\n"pinion.theta" = 5.0\n')
+    assert main(["simulate", str(scene), "--out", str(tmp_path / "o"), "--quiet"]) == 4
+    assert "the solve failed: max_events_per_step" in capsys.readouterr().err

@@ -154,7 +154,7 @@ def test_auto_store_resumes_an_interrupted_ladder(tmp_path):
     assert again.table.cached.all() and again.rung == plain.rung
     assert again.result.forces.equals(plain.result.forces)  # the chosen rung, run again
     other = load_scene(SCENE, CASES["reference"])
-    with pytest.raises(ModelError, match="^store.*different scene sha256"):
+    with pytest.raises(gm.StoreError, match="^store.*different scene sha256"):
         gm.choose_fidelity(other, 0.05, store=store)
 
 

@@ -84,7 +84,7 @@ def test_chatter_cap_raises_naming_the_contact():
     contact instead of a hang."""
     m = pair(1.0, 2e8, 1e-7)
     rp = m.bodies["pinion"].base_radius
-    with pytest.raises(gm.ModelError, match=r"max_events_per_step.*'mesh:(front|back)'"):
+    with pytest.raises(gm.SolveError, match=r"max_events_per_step.*'mesh:(front|back)'"):
         gm.simulate(m, 0.05, dt=0.01, v0={"pinion.theta": 1.0 / rp}, max_events_per_step=20)
     sim = gm.simulate(m, 0.02, dt=0.01, v0={"pinion.theta": 1.0 / rp},
                       max_events_per_step=100_000)

@@ -48,13 +48,13 @@ def test_stores_of_an_older_layout_are_refused_by_name(tmp_path):
     meta = json.loads((store / "sweep.json").read_text())
     meta.pop("format")
     (store / "sweep.json").write_text(json.dumps(meta))
-    with pytest.raises(gm.ModelError, match=r"^store = .*older gearmodal"):
+    with pytest.raises(gm.StoreError, match=r"^store = .*older gearmodal"):
         gm.sweep(scene, {"scene.t_end": [0.002]}, store=store, progress=False)
     sc = load_scene(scene, {"scene.t_end": 0.002})
     rungs = tmp_path / "rungs"
     rungs.mkdir()
     (rungs / "auto_store.json").write_text(json.dumps({"scene_sha256": "x", "coarsest": 4.0}))
-    with pytest.raises(gm.ModelError, match=r"^store = .*older gearmodal"):
+    with pytest.raises(gm.StoreError, match=r"^store = .*older gearmodal"):
         gm.choose_fidelity(sc, 0.05, store=rungs)
     shutil.rmtree(rungs)
 

@@ -63,9 +63,9 @@ def test_bad_input_is_named_and_a_store_refuses_another_scene(tmp_path):
     assert "scene.t_end" in rec.loc[1, "error"] and "> 0" in rec.loc[1, "error"]
     assert len(list((tmp_path / "cases").iterdir())) == 1  # the failed case is not stored
     other = ROOT / "studies" / "scenes" / "gear_rattle.toml"
-    with pytest.raises(gm.ModelError, match="store.*different scene"):
+    with pytest.raises(gm.StoreError, match="store.*different scene"):
         gm.sweep(other, {"scene.t_end": [0.01]}, store=tmp_path, progress=False)
-    with pytest.raises(gm.ModelError, match="store.*different metrics"):
+    with pytest.raises(gm.StoreError, match="store.*different metrics"):
         gm.sweep(STAGE, {"scene.t_end": [0.01]}, store=tmp_path, progress=False,
                  metrics=functools.partial(summarize, tables=True))
 

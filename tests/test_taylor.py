@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import gearmodal as gm
-from gearmodal.errors import ModelError
+from gearmodal.errors import ModelError, SolveError
 from gearmodal.integrate.kernels import GRAZE_MARGIN, candidate, hermite_max
 from gearmodal.integrate.system import PiecewiseLinearSystem
 from gearmodal.integrate.taylor import (
@@ -249,7 +249,7 @@ def test_event_buffer_grows_and_the_event_cap_names_the_contact():
     assert len(b.events) == len(a.events)
     assert (a.events.contact == b.events.contact).all()
     np.testing.assert_allclose(a.events.time, b.events.time, rtol=0, atol=1e-13)
-    with pytest.raises(ModelError, match="max_events_per_step.*contact"):
+    with pytest.raises(SolveError, match="max_events_per_step.*contact"):
         _stage_run(max_events_per_step=1)
 
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import ModelError, SolveError
 from .kernels import GRAZE_MARGIN, SIMULTANEOUS, advance_state, fast_steps
 from .loads import force_at
 from .system import TAYLOR_TERMS, PiecewiseLinearSystem, Propagators
@@ -101,7 +101,7 @@ class ExactIntegrator:
             count += len(same)
             if count > self.max_events:
                 name = sysm.names[int(same[0])]
-                raise ModelError(
+                raise SolveError(
                     "max_events_per_step",
                     f"more than {self.max_events} contact-state changes inside one step "
                     f"ending near t = {t:.9g} s, last at contact {name!r} (tooth chatter or a "
@@ -122,7 +122,7 @@ class ExactIntegrator:
 def _check_finite(X: np.ndarray, dt: float) -> None:
     if not np.all(np.isfinite(X)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(X), axis=1))[0])
-        raise ModelError("simulate", f"the solution is not finite at t = {bad * dt:.9g} s")
+        raise SolveError("simulate", f"the solution is not finite at t = {bad * dt:.9g} s")
 
 
 def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from ..errors import ModelError
+from ..errors import ModelError, SolveError
 from .system import PiecewiseLinearSystem
 
 BETA, GAMMA = 0.25, 0.5
@@ -70,7 +70,7 @@ def run_newmark(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: 
         q, v, a = q1, v1, a1
         x = np.concatenate([q, v])
         if not np.all(np.isfinite(x)):
-            raise ModelError("simulate", f"newmark: the solution is not finite at "
+            raise SolveError("simulate", f"newmark: the solution is not finite at "
                                          f"t = {(k + 1) * dt:.9g} s")
         p = system.penetration(x, azimuth(k + 1))
         new = p > 0

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import ModelError, SolveError
 from .loads import force_at
 from .system import PiecewiseLinearSystem
 
@@ -149,11 +149,11 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
                             dense_output=bool(muted),
                             events=evs or None, rtol=rtol, atol=atol, **options)
         except ValueError as err:  # scipy's own event root-finding can fail on flat events
-            raise ModelError("simulate", f"scipy ({scipy_method}) event location failed at "
+            raise SolveError("simulate", f"scipy ({scipy_method}) event location failed at "
                              f"t = {t:.9g} s: {err}") from None
         nfev += sol.nfev
         if not sol.success and sol.status != 1:
-            raise ModelError("simulate", f"scipy ({scipy_method}) failed: {sol.message}")
+            raise SolveError("simulate", f"scipy ({scipy_method}) failed: {sol.message}")
         if muted:
             t_end_span = sol.t_events and min((tt[0] for tt in sol.t_events if len(tt)),
                                               default=t_stop)
@@ -240,7 +240,7 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             force = system.c[e] * wv[e] if s[e] else 0.0
             events.append((float(te), int(e), before, bool(s[e]), float(r[e]), float(force)))
         if len(events) > max_events:
-            raise ModelError("simulate", f"scipy: more than {max_events} events")
+            raise SolveError("simulate", f"scipy: more than {max_events} events")
         t = float(te)
     return X, S, events, {"nfev": nfev}
 

@@ -39,7 +39,7 @@ import types
 import numba
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import SolveError
 from .kernels import GRAZE_MARGIN, SIMULTANEOUS, _bisect_up
 from .kernels import _poly as _hpoly
 
@@ -2169,7 +2169,7 @@ class TaylorIntegrator:
         if peaks is not None:
             peaks.turns.update(TP, ntp)
         if status != 0:
-            raise ModelError(
+            raise SolveError(
                 "max_events_per_step",
                 f"more than {self.max_events} contact-state changes inside one step "
                 f"ending near t = {(k + 1) * self.dt:.9g} s, last at contact "

@@ -60,7 +60,7 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from ..errors import ModelError
+from ..errors import ModelError, SolveError
 from ..integrate import (
     PEAK_BIN,
     Driver,
@@ -530,7 +530,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
             # no gearbox state reaches this (deflections from the re-based rotation, in m and
             # rad, and their rates): the method has diverged, and the next aerodynamic step
             # would fail somewhere less clear (the generator's slip overflows)
-            raise ModelError(
+            raise SolveError(
                 "method", f"= {method!r}: the gearbox state diverged in the aerodynamic step "
                 f"ending at t = {t + aero_dt:.3f} s (largest entry {np.abs(x).max():.3g}, "
                 f"above {DIVERGED:g}); "

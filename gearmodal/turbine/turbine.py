@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..errors import ModelError
+from ..errors import ModelError, SolveError
 from ..model.schema import REQUIRED, Field, Table
 from ..result_io import (
     VIEW_ROWS,
@@ -378,7 +378,7 @@ def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 
             on = True
             cut_in = t + dt
         if not math.isfinite(omega):
-            raise ModelError("simulate_turbine", f"rotor speed not finite at t = {t:.3f} s")
+            raise SolveError("simulate_turbine", f"rotor speed not finite at t = {t:.3f} s")
         if progress is not None:
             progress(k + 1, n)
     df = pd.DataFrame(rows, columns=TURBINE_COLUMNS).set_index("time")
