@@ -74,6 +74,7 @@ from .driver import Driver, get_method
 from .peaks import PEAK_BIN
 from .record import ForceMap, Recorder
 from .result import SimulationResult
+from .rigid import elastic
 from .system import PiecewiseLinearSystem
 
 __all__ = ["HOLDS", "REBASE_ANGLE", "Drive", "Stepper"]
@@ -522,17 +523,8 @@ class Stepper:
         tables; else :meth:`_absolute`)."""
         if not self.follow:
             return self._absolute(X)
-        n, r = self.n, self.rigid
-        Mr = self.asm.M @ r
-        J = float(r @ Mr)
-        parts = []
-        for block in (X[:, :n], X[:, n:]):
-            phi = block @ (Mr / J)
-            e = np.array(block)
-            for j in np.flatnonzero(r):
-                e[:, j] -= r[j] * phi
-            parts.append(e)
-        return parts[0], parts[1]
+        Mr = self.asm.M @ self.rigid
+        return elastic(X, self.n, self.rigid, Mr, float(self.rigid @ Mr))
 
     def _reference_ratio(self, dof: str) -> float:
         """The DOF's reference speed per input speed (its body's ``speed_ratio``), for a

@@ -73,6 +73,7 @@ from ..integrate import (
     stored_result,
 )
 from ..integrate.azimuth import AzimuthAssembler
+from ..integrate.rigid import elastic as take_out_rigid
 from ..integrate.system import PiecewiseLinearSystem
 from ..massscale import scaled_mass
 from ..model.components import G_STANDARD, GRAVITY
@@ -366,14 +367,7 @@ def simulate_drivetrain(turbine: Turbine, wind: Wind, gearbox, t_end: float, *,
     def elastic(X):
         """Elastic deflections and rates of states ``X`` (rows): the rigid rotation (re-based
         at each re-basing) taken out, column by column."""
-        parts = []
-        for block in (X[:, :n], X[:, n:]):
-            phi = block @ (Mr / J)
-            e = np.array(block)
-            for j in np.flatnonzero(r):
-                e[:, j] -= r[j] * phi
-            parts.append(e)
-        return parts[0], parts[1]
+        return take_out_rigid(X, n, r, Mr, J)
 
     mount = math.radians(turbine.mounting_azimuth_deg) + 0.5 * math.pi  # planet 1 on blade 1
 
