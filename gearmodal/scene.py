@@ -264,6 +264,20 @@ class Scene:
                         q0=self.initial_q(), v0=self.v0, method=self.method,
                         speed_rpm=self.speed_rpm, out=out, **self.options)
 
+    def loads_at(self, t: float) -> dict:
+        """Every load's value at time ``t`` (s), N or N m: a number as it is, a Series on its
+        knots (ends held), a wave or any other function of time evaluated."""
+        out = {}
+        for name, val in self.loads.items():
+            if isinstance(val, (int, float)):
+                out[name] = float(val)
+            elif hasattr(val, "index") and hasattr(val, "to_numpy"):  # a Series on its knots
+                knots = np.asarray(val.index, dtype=float)
+                out[name] = float(np.interp(t, knots, val.to_numpy(dtype=float)))
+            else:  # a wave or any other function of time
+                out[name] = float(val(t))
+        return out
+
     def initial_q(self) -> dict:
         """The run's initial displacements by DOF name: ``[q0]`` (zero elsewhere) or, with
         ``start = "equilibrium"``, the static equilibrium (:func:`gearmodal.equilibrium`)
@@ -274,15 +288,7 @@ class Scene:
             return self.q0
         from .static import equilibrium
 
-        at0 = {}
-        for name, val in self.loads.items():
-            if isinstance(val, (int, float)):
-                at0[name] = float(val)
-            elif hasattr(val, "index") and hasattr(val, "to_numpy"):  # a Series on its knots
-                t = np.asarray(val.index, dtype=float)
-                at0[name] = float(np.interp(0.0, t, val.to_numpy(dtype=float)))
-            else:  # a wave or any other function of time
-                at0[name] = float(val(0.0))
+        at0 = self.loads_at(0.0)
         try:
             eq = equilibrium(self.model, at0, self.speed_rpm)
         except ModelError as e:

@@ -142,11 +142,14 @@ def test_streamed_equals_held(stage, tmp_path):
     np.testing.assert_array_equal(back.q.to_numpy(), ra.q.to_numpy())
 
 
-def test_newmark_chunks_keep_run_times(pair):
-    """A method that does not chain (Newmark) is given times from the call's start: its
-    events are logged at the run's times and its loads follow the ramp."""
-    kw = dict(dt=1e-4, loads={"pinion.torque": 0.0}, method="newmark",
-              v0={"pinion.theta": 1.0})
+@pytest.mark.parametrize("method, options", [("newmark", {}),
+                                             ("exact", {"propagator": "expm"})])
+def test_unchained_chunks_keep_run_times(pair, method, options):
+    """A method that does not chain (Newmark, the exact method's expm propagator) is given
+    times from the call's start: its events are logged at the run's times and its loads
+    follow the ramp."""
+    kw = dict(dt=1e-4, loads={"pinion.torque": 0.0}, method=method,
+              v0={"pinion.theta": 1.0}, **options)
     one, two = gm.Stepper(pair, **kw), gm.Stepper(pair, **kw)
     one.advance(0.02, {"pinion.torque": 2.0})
     two.advance(0.01, {"pinion.torque": 1.0})

@@ -49,11 +49,16 @@ class Method:
     chains = False
     _run = None
 
+    def chains_with(self, options: dict) -> bool:
+        """Whether this method, with these options, continues a run across calls
+        (:attr:`chains`)."""
+        return self.chains
+
     def run(self, system: PiecewiseLinearSystem, dt: float, n_steps: int, F: np.ndarray,
             x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0, loads=None, peaks=None,
             t0: float = 0.0, k_org: int | None = None, **options):
         if k_org is not None:
-            if self.chains:
+            if self.chains_with(options):
                 options = {**options, "k_org": k_org}
             else:  # times from the call's start, the events' back from the run's
                 t_org = k_org * dt
@@ -98,6 +103,10 @@ class Exact(Method):
     takes_peaks = True
     chains = True
     _run = staticmethod(run_exact)
+
+    def chains_with(self, options: dict) -> bool:
+        """The Taylor propagator chains; ``"expm"`` restarts at every call."""
+        return options.get("propagator", "taylor") == "taylor"
 
 
 class Newmark(Method):

@@ -159,9 +159,9 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     marks it sampled (``peaks.exact = False``).
 
     ``k_org``: the call continues a run at its output step ``k_org``
-    (:class:`~gearmodal.integrate.driver.Method`): ``azimuth0`` and the loads' times from the
-    run's start, and the events' times returned; the Taylor propagator walks the pieces one
-    call would.
+    (:class:`~gearmodal.integrate.driver.Method`, which gives it to the Taylor propagator
+    only): ``azimuth0`` and the loads' times from the run's start, and the events' times
+    returned; the propagator walks the pieces one call would.
     """
     system.asm.require_piecewise_linear("method='exact'")
     if propagator not in PROPAGATORS:
@@ -183,15 +183,6 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     if integ is None:
         kind = TaylorIntegrator if propagator == "taylor" else ExactIntegrator
         integ = cache[key] = kind(system, dt, max_events_per_step)
-    if k_org is not None and propagator != "taylor":  # times from the call's start
-        t_org = k_org * dt
-        if loads is not None:
-            loads = (np.asarray(loads[0], dtype=float) - t_org,) + tuple(loads[1:])
-        X, S, events, stats = run_exact(system, dt, n_steps, F_grid, x0, s0,
-                                        max_events_per_step, propagator,
-                                        azimuth0 + system.omega * t_org, loads, peaks, t0)
-        events = [(te + t_org, *rest) for te, *rest in events]
-        return X, S, events, stats
     if peaks is not None and propagator != "taylor":
         peaks.exact = False
     if loads is not None and propagator != "taylor":

@@ -153,18 +153,18 @@ class Stepper:
             raise ModelError("reference", f"= {reference!r}: must be one of "
                              + ", ".join(map(repr, REFERENCES)))
         self.follow = reference == "follow"
-        self.rebase_speed = _positive("rebase_speed", rebase_speed, "")
-        self.rebase_angle = _positive("rebase_angle", rebase_angle, "")
+        self.rebase_speed = _positive("rebase_speed", rebase_speed)
+        self.rebase_angle = _positive("rebase_angle", rebase_angle)
         self.rebase_steps = 0  # "follow" re-bases at every call's end
         if rebase_dt is not None:
-            self.rebase_steps = round(_positive("rebase_dt", rebase_dt, "") / float(dt))
+            self.rebase_steps = round(_positive("rebase_dt", rebase_dt) / float(dt))
             if self.rebase_steps < 1 or abs(self.rebase_steps * dt - rebase_dt) \
                     > GRID_TOL * rebase_dt:
                 raise ModelError("rebase_dt", f"= {rebase_dt!r}: must be a whole number of "
                                  f"output steps dt = {dt!r} s")
         if not isinstance(model, Model):
             raise TypeError(f"expected a gm.Model, got {type(model).__name__}")
-        self.dt = _positive("dt", dt, "time")
+        self.dt = _positive("dt", dt)
         if not isinstance(speed_rpm, (int, float)) or isinstance(speed_rpm, bool) \
                 or not math.isfinite(speed_rpm):
             raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number (rpm)")
@@ -295,17 +295,9 @@ class Stepper:
         if scene.method == "auto":
             raise ModelError("scene.method", "= 'auto' chooses among whole runs; give a "
                              "method (exact, newmark, scipy) to step a scene")
-        loads = {}
-        for name, val in scene.loads.items():
-            if isinstance(val, (int, float)):
-                loads[name] = float(val)
-            elif isinstance(val, pd.Series):
-                t = np.asarray(val.index, dtype=float)
-                loads[name] = float(np.interp(0.0, t, val.to_numpy(dtype=float)))
-            else:  # a wave or another function of time
-                loads[name] = float(val(0.0))
         args = {"dt": scene.dt, "method": scene.method, "speed_rpm": scene.speed_rpm,
-                "loads": loads, "q0": scene.initial_q(), "v0": scene.v0, **scene.options}
+                "loads": scene.loads_at(0.0), "q0": scene.initial_q(), "v0": scene.v0,
+                **scene.options}
         return cls(scene.model, **{**args, **kwargs})
 
     # -- the host's calls -------------------------------------------------------------------
@@ -471,7 +463,7 @@ class Stepper:
             raise TypeError(f"drive: expected a gm.Drive, got {type(drive).__name__}")
         if drive.dof not in asm.dof_names:
             raise ModelError("drive.dof", unknown("DOF", drive.dof, asm.dof_names))
-        _positive("drive.stiffness", drive.stiffness, "rotational_stiffness")
+        _positive("drive.stiffness", drive.stiffness)
         c = _number("drive.damping", drive.damping)
         if c < 0:
             raise ModelError("drive.damping", f"= {c!r}: must be >= 0 N m s/rad")
@@ -691,7 +683,7 @@ def _number(label: str, val) -> float:
     return float(val)
 
 
-def _positive(label: str, val, kind: str) -> float:
+def _positive(label: str, val) -> float:
     x = _number(label, val)
     if x <= 0:
         raise ModelError(label, f"= {val!r}: must be > 0")
