@@ -21,7 +21,7 @@ from .coupling import (
 )
 from .errors import GearmodalError, ModelError, SolveError, StoreError
 from .integrate import Harmonic, SimulationResult, simulate
-from .integrate.stepper import Drive, Stepper
+from .integrate.stepper import Drive, SpeedTorque, Stepper
 from .modal import ModalResult, modal
 from .model import (
     DOF_LEVELS,
@@ -54,7 +54,7 @@ __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Const
            "GearmodalError", "Joint", "LinearConstraint", "LinearSystem", "ModelSystem", "System",
            "Gear", "Harmonic", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
            "SolveError", "StoreError",
-           "SimulationResult", "Stepper", "simulate",
+           "SimulationResult", "SpeedTorque", "Stepper", "simulate",
            "assemble", "balance", "campbell", "choose_fidelity", "drivetrain", "equilibrium",
            "gear_pair",
            "lin_parker_stage", "load", "loads", "dump", "dumps", "modal", "parallel_stage",

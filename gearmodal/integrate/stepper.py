@@ -59,7 +59,8 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from ..errors import ModelError, unknown
+from ..errors import ModelError, SolveError, unknown
+from ..massscale import scaled_mass
 from ..model import validate as v
 from ..model.model import Model
 from . import (
@@ -70,14 +71,14 @@ from . import (
     stored_result,
 )
 from .azimuth import AzimuthAssembler
-from .driver import Driver, get_method
+from .driver import Driver, check_fits, get_method
 from .peaks import PEAK_BIN
 from .record import ForceMap, Recorder
 from .result import SimulationResult
 from .rigid import elastic
-from .system import PiecewiseLinearSystem
+from .system import RPM, PiecewiseLinearSystem
 
-__all__ = ["HOLDS", "REBASE_ANGLE", "Drive", "Stepper"]
+__all__ = ["HOLDS", "REBASE_ANGLE", "Drive", "SpeedTorque", "Stepper"]
 
 #: how inputs act between two calls' ends
 HOLDS = ("ramp", "hold")
@@ -90,6 +91,9 @@ REBASE_TAU = 0.1
 REBASE_ANGLE = 2 * math.pi
 #: a call's end this close to a whole number of output steps is on the grid (of ``dt``)
 GRID_TOL = 1e-9
+#: a state entry beyond this (m, rad, m/s, rad/s of deflection from the reference rotation)
+#: means the integration method diverged
+DIVERGED = 1e6
 
 
 @dataclass(frozen=True)
@@ -106,6 +110,21 @@ class Drive:
     damping: float = 0.0
     angle0: float | None = None
     speed0: float | None = None
+
+
+@dataclass(frozen=True)
+class SpeedTorque:
+    """A torque on rotation ``dof`` that depends on its speed: ``law(speed)`` returns the
+    torque on the DOF (N m, in its positive sense) and its derivative by the speed (N m s/rad)
+    at ``speed`` (rad/s, absolute). An induction generator's torque-slip curve is one: its
+    slip damping is stiff, so the stepper takes it **implicitly**, linearised at the
+    reference speed, ``law(w_ref) + law'(w_ref) (w - w_ref)``: a constant torque and a damper
+    ``-law'`` in the equations, taken anew at every re-basing of the reference
+    (``reference="follow"``) and at :meth:`Stepper.set_speed_torque`. Its error is that of the
+    tangent over a re-basing's speed drift (``rebase_speed``)."""
+
+    dof: str
+    law: object
 
 
 class Stepper:
@@ -139,6 +158,11 @@ class Stepper:
         may, every ``rebase_dt`` from the start (the calls split there, their inputs linear
         across), so that the run does not depend on the call ends; None: at every call's end
         (then it does, at the level of the re-basing).
+    azimuth0 : the input azimuth at time 0, rad (a turning geometry's start; the reference
+        rotation's origin).
+    speed_torque : a :class:`SpeedTorque` (a generator), linearised at the reference speed.
+    top_frequency_hz : the mass-scaling rung (:mod:`gearmodal.massscale`): the modes above
+        this frequency slowed to it by added mass along them; ``None``: the full model.
     """
 
     def __init__(self, model: Model, *, dt: float, loads: dict | None = None,
@@ -147,7 +171,9 @@ class Stepper:
                  v0: dict | None = None, peak_bin: float | None = PEAK_BIN,
                  turning_points: bool = True, out=None, record: bool = True,
                  reference: str = "fixed", rebase_speed: float = 0.01,
-                 rebase_angle: float = 5e-4, rebase_dt: float | None = None, **options):
+                 rebase_angle: float = 5e-4, rebase_dt: float | None = None,
+                 azimuth0: float = 0.0, speed_torque: SpeedTorque | None = None,
+                 top_frequency_hz: float | None = None, **options):
         get_method(method, options)
         if reference not in REFERENCES:
             raise ModelError("reference", f"= {reference!r}: must be one of "
@@ -173,11 +199,16 @@ class Stepper:
             raise ModelError("turning_points", f"= {turning_points!r}: True or False")
         self.model = model
         self.omega = float(speed_rpm) * 2 * math.pi / 60
-        asm = model.assemble()
-        self.asm = asm
+        psi0 = _number("azimuth0", azimuth0)
         turns = rotating_geometry(model) if (self.omega or self.follow) else False
-        geo = AzimuthAssembler(model) if turns else None
-        self.geo = geo
+        geo = AzimuthAssembler(model) if (turns or top_frequency_hz is not None) else None
+        self.mass_scaling = None
+        if top_frequency_hz is not None:
+            Ms, self.mass_scaling = scaled_mass(geo, top_frequency_hz)
+            geo = geo.with_mass(Ms)
+        asm = model.assemble() if geo is None else geo.template
+        self.asm = asm
+        self.geo = geo if turns else None
         names = list(asm.load_names)
         loads = dict(loads or {})
         for name, val in loads.items():
@@ -188,25 +219,45 @@ class Stepper:
         cols = {names.index(nm) for nm in loads}
         grounded = ()
         if drive is not None:
-            self._i_drive, j = self._drive_column(drive)
+            self._i_drive, j = self._torque_column(drive.dof, "drive")
             cols.add(j)
+            self._drive_name = names[j]
+            _positive("drive.stiffness", drive.stiffness)
+            c = _number("drive.damping", drive.damping)
+            if c < 0:
+                raise ModelError("drive.damping", f"= {c!r}: must be >= 0 N m s/rad")
             grounded = ((self._i_drive, float(drive.stiffness), float(drive.damping)),)
+        self.speed_torque = None
+        if speed_torque is not None:
+            self._check_speed_torque(speed_torque)
+            i, j = self._torque_column(speed_torque.dof, "speed_torque")
+            self._st_index = (i, j)
+            cols.add(j)
+            self.speed_torque = speed_torque
         self.columns = sorted(cols)
         self.load_index = {names[j]: i for i, j in enumerate(self.columns)}
         self.u = np.zeros(len(self.columns))
         for name, val in loads.items():
             self.u[self.load_index[name]] = float(val)
+        # every rotation's reference speed per input speed (its body's speed_ratio)
+        self.ratio = np.array([self._reference_ratio(d) for d in asm.dof_names])
+        self.ref = _Reference(self.omega, psi0)
+        self.rigid = None
+        if self.follow:  # the drivetrain's rigid rotation, per input speed
+            self.rigid = self._follow_motion(asm)
+        self._drive_grounded = grounded
+        self._tau = 0.0  # the speed torque's constant part, N m
+        grounded = self._grounded()
         cpu = time.process_time()
-        system = PiecewiseLinearSystem(asm, speed_rpm, geometry=geo, grounded=grounded)
-        system.azimuth0 = 0.0
+        system = PiecewiseLinearSystem(asm, speed_rpm, geometry=self.geo, grounded=grounded)
+        system.azimuth0 = psi0
         self.system = system
         self.grounded = grounded
-        self.ref = _Reference(self.omega)
         self._om_rho = self.omega  # the speed of the last full spectral bound (follow)
         n = asm.n
         self.n = n
         x = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
-        s = system.penetration(x) > 0
+        s = system.penetration(x, psi0) > 0
         self.s_init = s.copy()
         if system.turning:  # load values through the turning load map, f_const last
             system.use_loads(self.columns)
@@ -215,25 +266,9 @@ class Stepper:
         else:
             self._basis = asm.B[:, self.columns]
             self._F = system.f_const.copy()
-        # every rotation's reference speed per input speed (its body's speed_ratio)
-        self.ratio = np.array([self._reference_ratio(d) for d in asm.dof_names])
         # fixed: the rigid rotation moved out of the state (module docstring), the one motion
-        # no stiffness, damping or gap sees; none on a turning system. follow: the
-        # drivetrain's rigid rotation, per input speed
-        self.rigid = None
-        if self.follow:
-            self.rigid = _rigid_motion(asm.M, asm.K, asm.C, asm.contacts.W,
-                                       asm.contacts.stiffness, damped=False)
-            if self.rigid is None:
-                raise ModelError("reference", "= 'follow' needs one free rigid rotation of the "
-                                 "drivetrain (a gearbox whose wheels turn freely together); "
-                                 "this model has none or several")
-            j = int(np.argmax(np.abs(self.rigid) * (self.ratio != 0)))
-            if self.ratio[j] == 0:
-                raise ModelError("reference", "= 'follow': the free rotation turns no wheel "
-                                 "with a speed_ratio")
-            self.rigid = self.rigid * (self.ratio[j] / self.rigid[j])
-        elif not system.turning:
+        # no stiffness, damping or gap sees; none on a turning system
+        if not self.follow and not system.turning:
             self.rigid = _rigid_motion(asm.M, system.K0, system.C0, system.W, system.k,
                                        grounded)
         self.offset = 0.0  # rigid rotation moved out so far, in units of ``rigid``
@@ -261,7 +296,9 @@ class Stepper:
                          "drive": None if drive is None else {
                              "dof": drive.dof, "stiffness": float(drive.stiffness),
                              "damping": float(drive.damping)},
-                         "reference": reference, "stepped": True}
+                         "reference": reference, "stepped": True,
+                         "azimuth0": psi0, "top_frequency_hz": top_frequency_hz,
+                         "mass_scaling": self.mass_scaling}
         if self.follow:
             self.settings.update(rebase_speed=self.rebase_speed,
                                  rebase_angle=self.rebase_angle)
@@ -275,6 +312,9 @@ class Stepper:
                 raise ModelError(f"outputs.{name}", unknown("output", name,
                                                             self.output_names))
         self.outputs = list(outputs)
+        # the force rows cost a mesh stiffness and a force map per call: only when asked for
+        self._forces = any(name in self.fmap.labels for name in self.outputs)
+        self._force_rebase = False  # set_speed_torque: re-base at the next call's start
         self._cpu = time.process_time() - cpu
         self._done = None
 
@@ -308,7 +348,7 @@ class Stepper:
         return self.run.k * self.dt
 
     def advance(self, t: float, loads: dict | None = None, *, hold: str = "ramp",
-                drive_angle: float | None = None,
+                start: dict | None = None, drive_angle: float | None = None,
                 drive_speed: float | None = None) -> dict[str, float]:
         """Advance to time ``t`` (s; a whole number of output steps ``dt`` from 0, after the
         time reached) and return the outputs there (:attr:`outputs`).
@@ -324,7 +364,9 @@ class Stepper:
           the call's start, turning at that speed over the call.
 
         ``loads``: ``{load name: value}`` for loads given at construction (others keep their
-        last value).
+        last value). ``start`` (with ``"ramp"``): values of some of them at the call's start
+        instead of at the last call's end (a step there, then the ramp to ``loads``: a host
+        extrapolating its last samples).
         """
         if self._done is not None:
             raise ModelError("advance", "the run is finished: result() was called")
@@ -337,13 +379,10 @@ class Stepper:
                              f"s) by a whole number of output steps dt = {self.dt!r} s")
         k0 = self.run.k
         span = k1 * self.dt - k0 * self.dt
-        given = self.u.copy()
-        for name, val in (loads or {}).items():
-            if name not in self.settings["loads"]:
-                raise ModelError(f"loads.{name}", unknown(
-                    "load set between calls (give it at construction, loads=...)", name,
-                    list(self.settings["loads"])))
-            given[self.load_index[name]] = _number(f"loads.{name}", val)
+        given = self._given(self.u, loads, "loads")
+        if start is not None and hold != "ramp":
+            raise ModelError("start", "is the loads at a ramp's start: give it with "
+                             "hold='ramp'")
         host0 = host1 = None
         if self.drive is not None:
             a0, w0 = self._host
@@ -355,7 +394,8 @@ class Stepper:
                 a1 = (a0 + 0.5 * (w0 + w1) * span if drive_angle is None
                       else _number("drive_angle", drive_angle))
                 host0, host1 = tuple(self._host), (a1, w1)
-        g0 = given if hold == "hold" else self.u  # the given loads at the call's start
+        # the given loads at the call's start
+        g0 = given if hold == "hold" else self._given(self.u, start, "start")
         cpu = time.process_time()
         # the call's stretches: to each re-basing point of "follow" inside it, then its end
         ends = [k1]
@@ -364,6 +404,9 @@ class Stepper:
             ends = list(range((k0 // m + 1) * m, k1, m)) + [k1]
         ka = k0
         for kb in ends:
+            if ka and (self._force_rebase or (self.follow and (
+                    not self.rebase_steps or ka % self.rebase_steps == 0))):
+                self._follow(force=self._force_rebase)
             # the inputs linear over the call (its ends' values exactly at its ends)
             ga, ha = _between(ka, k0, k1, g0, given), _between(ka, k0, k1, host0, host1)
             gb, hb = _between(kb, k0, k1, g0, given), _between(kb, k0, k1, host0, host1)
@@ -375,8 +418,7 @@ class Stepper:
             F = np.tile(self._F, (kb - ka + 1, 1))
             self.run.advance(self.system, kb - ka, F, azimuth0=self.ref.origin(), loads=timed,
                              azimuths=self.ref.at(np.arange(ka, kb + 1) * self.dt))
-            if self.follow and (not self.rebase_steps or kb % self.rebase_steps == 0):
-                self._follow()
+            self._diverged(kb)
             ka = kb
         self.u = given
         if host1 is not None:
@@ -397,10 +439,11 @@ class Stepper:
         out.update({f"{d}.velocity": val for d, val in zip(self.asm.dof_names, qd,
                                                             strict=True)})
         t = self.time
-        K = mesh_stiffness(self.system, np.array([self.ref.at(t)]))
-        f = self.fmap.rows(self.system, x[None, :], self.run.s[None, :],
-                           np.array([t - self.ref.t_f]), K)
-        out.update(zip(self.fmap.labels, f[0], strict=True))
+        if self._forces:
+            K = mesh_stiffness(self.system, np.array([self.ref.at(t)]))
+            f = self.fmap.rows(self.system, x[None, :], self.run.s[None, :],
+                               np.array([t - self.ref.t_f]), K)
+            out.update(zip(self.fmap.labels, f[0], strict=True))
         if self.drive is not None:
             out["drive.torque"] = self._drive_torque()
         return {name: float(out[name]) for name in self.outputs}
@@ -419,10 +462,39 @@ class Stepper:
         """Each contact's state (True: closed) at the time reached."""
         return pd.Series(self.run.s.copy(), index=self.system.names, name="closed")
 
-    def result(self) -> SimulationResult:
+    def reserve(self, t_end: float) -> None:
+        """Hold the rows up to ``t_end`` (s) in one array written as the run goes, so that
+        :meth:`result` needs no copy of the history; refuses (naming the memory) a run whose
+        rows would not fit. Nothing to do when the rows stream to ``out`` or are not kept."""
+        if self.sink is not None:
+            return
+        n_steps = round(_positive("t_end", t_end) / self.dt)
+        nsp = len(self.asm.springs) if self.asm.springs is not None else 0
+        check_fits(n_steps + 1, 4 * self.n + len(self.asm.contacts.element) + nsp,
+                   "give out=DIR (the rows go to disk as the run goes; gearmodal simulate "
+                   "does), a longer dt or a shorter t_end")
+        self.run.reserve(n_steps)
+
+    def set_speed_torque(self, speed_torque: SpeedTorque) -> None:
+        """Replace the speed-dependent torque (same DOF; a generator switched onto the grid)
+        from the time reached: the reference is re-based at the next call's start, its
+        tangent taken there and the spectral bounds anew."""
+        if self.speed_torque is None:
+            raise ModelError("speed_torque", "the stepper was made without one: give "
+                             "speed_torque= at construction")
+        self._check_speed_torque(speed_torque)
+        if speed_torque.dof != self.speed_torque.dof:
+            raise ModelError("speed_torque.dof", f"= {speed_torque.dof!r}: the stepper's is "
+                             f"{self.speed_torque.dof!r}")
+        self.speed_torque = speed_torque
+        self._force_rebase = True
+
+    def result(self, settings: dict | None = None,
+               stats: dict | None = None) -> SimulationResult:
         """The run so far as a :class:`~gearmodal.SimulationResult` (the one
         :func:`gearmodal.simulate` builds: rows at every ``dt``, the event log, exact peaks
-        and turning points); the run ends here."""
+        and turning points); the run ends here. ``settings``, ``stats``: entries added to the
+        result's (a host's own: its plant, its clock)."""
         if self._done is not None:
             return self._done
         if not self.record:
@@ -433,9 +505,10 @@ class Stepper:
         run = self.run
         stats = {**run.stats, "cpu_s": self._cpu, "n_events": run.n_events,
                  "n_steps": run.k,
-                 "n_rebases": len(self.ref.stretches) - 1 if self.follow else len(self._rebases)}
+                 "n_rebases": len(self.ref.stretches) - 1 if self.follow else len(self._rebases),
+                 **(stats or {})}
         t_end = run.k * self.dt
-        settings = {**self.settings, "t_end": t_end}
+        settings = {**self.settings, "t_end": t_end, **(settings or {})}
         if self.sink is not None:
             self._done = stored_result(self.sink, self.system, self.s_init, stats, settings,
                                        (0.0, t_end), peaks=run.peaks)
@@ -456,58 +529,122 @@ class Stepper:
 
     # -- bookkeeping -----------------------------------------------------------------------
 
-    def _drive_column(self, drive: Drive) -> tuple[int, int]:
-        """The driven coordinate and the load column acting on it alone (its torque)."""
+    def _torque_column(self, dof: str, label: str) -> tuple[int, int]:
+        """Coordinate ``dof`` and the load column acting on it alone (its torque)."""
         asm = self.asm
-        if not isinstance(drive, Drive):
-            raise TypeError(f"drive: expected a gm.Drive, got {type(drive).__name__}")
-        if drive.dof not in asm.dof_names:
-            raise ModelError("drive.dof", unknown("DOF", drive.dof, asm.dof_names))
-        _positive("drive.stiffness", drive.stiffness)
-        c = _number("drive.damping", drive.damping)
-        if c < 0:
-            raise ModelError("drive.damping", f"= {c!r}: must be >= 0 N m s/rad")
-        i = asm.dof_names.index(drive.dof)
+        if not isinstance(dof, str) or dof not in asm.dof_names:
+            raise ModelError(f"{label}.dof", unknown("DOF", dof, asm.dof_names))
+        i = asm.dof_names.index(dof)
         for j in range(asm.B.shape[1]):
             col = asm.B[:, j]
             if col[i] == 1.0 and np.count_nonzero(col) == 1:
-                self._drive_col, self._drive_name = j, asm.load_names[j]
                 return i, j
-        raise ModelError("drive.dof", f"= {drive.dof!r}: no load acts on it alone (a torque "
-                         "load such as 'carrier.torque'); drive a wheel's rotation")
+        raise ModelError(f"{label}.dof", f"= {dof!r}: no load acts on it alone (a torque "
+                         "load such as 'carrier.torque'); give a wheel's rotation")
 
-    def _follow(self) -> None:
-        """``reference="follow"``: re-base the reference rotation at this call's end where the
-        drivetrain has left it (module docstring; as the turbine run's re-basing)."""
-        n, r, ref = self.n, self.rigid, self.ref
-        x = self.run.x
-        Mr = self.asm.M @ r
-        J = float(r @ Mr)
-        phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
-        if not (abs(dom) > self.rebase_speed * max(abs(ref.om_f), 1e-3)
-                or abs(phi) > self.rebase_angle):
-            return
-        t = self.time
-        om_new = ref.om_f + dom + phi / REBASE_TAU
-        x = x.copy()
-        x[n:] -= r * (om_new - ref.om_f)
+    @staticmethod
+    def _check_speed_torque(speed_torque) -> None:
+        if not isinstance(speed_torque, SpeedTorque):
+            raise TypeError(f"speed_torque: expected a gm.SpeedTorque, got "
+                            f"{type(speed_torque).__name__}")
+        if not callable(speed_torque.law):
+            raise ModelError("speed_torque.law", f"= {speed_torque.law!r}: must be a function "
+                             "of the speed returning (torque, dtorque/dspeed)")
+
+    def _given(self, u: np.ndarray, loads: dict | None, label: str) -> np.ndarray:
+        """Load values ``u`` with the host's ``loads`` (by name) put in."""
+        out = u.copy()
+        for name, val in (loads or {}).items():
+            if name not in self.settings["loads"]:
+                raise ModelError(f"{label}.{name}", unknown(
+                    "load set between calls (give it at construction, loads=...)", name,
+                    list(self.settings["loads"])))
+            out[self.load_index[name]] = _number(f"{label}.{name}", val)
+        return out
+
+    def _follow_motion(self, asm) -> np.ndarray:
+        """The drivetrain's rigid rotation scaled to the speed ratio of the wheel it turns
+        most (``"follow"``'s reference motion)."""
+        r = _rigid_motion(asm.M, asm.K, asm.C, asm.contacts.W, asm.contacts.stiffness,
+                          damped=False)
+        if r is None:
+            raise ModelError("reference", "= 'follow' needs one free rigid rotation of the "
+                             "drivetrain (a gearbox whose wheels turn freely together); "
+                             "this model has none or several")
+        j = int(np.argmax(np.abs(r) * (self.ratio != 0)))
+        if self.ratio[j] == 0:
+            raise ModelError("reference", "= 'follow': the free rotation turns no wheel "
+                             "with a speed_ratio")
+        return r * (self.ratio[j] / r[j])
+
+    def _grounded(self) -> tuple:
+        """The springs and dampers to ground: the drive's, and the speed torque's tangent
+        damper at the reference speed now (:class:`SpeedTorque`), whose constant torque goes
+        to ``_tau``."""
+        out = self._drive_grounded
+        self._tau = 0.0
+        if self.speed_torque is not None:
+            i = self._st_index[0]
+            w = float(self.ratio[i]) * self.ref.om_f
+            tau, dtau = self.speed_torque.law(w)
+            self._tau = _number("speed_torque.law's torque", tau)
+            dtau = _number("speed_torque.law's derivative", dtau)
+            if dtau:
+                out = out + ((i, 0.0, -dtau),)
+        return out
+
+    def _follow(self, force: bool = False) -> None:
+        """Re-base the reference rotation at the time reached where the drivetrain has left
+        it (``reference="follow"``: module docstring; as the turbine run's re-basing), or
+        (``force``) take the speed torque's tangent anew."""
+        n, ref, t = self.n, self.ref, self.time
+        self._force_rebase = False
+        x = self.run.x.copy()
+        if self.follow:
+            r = self.rigid
+            Mr = self.asm.M @ r
+            J = float(r @ Mr)
+            phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
+            if not (force or abs(dom) > self.rebase_speed * max(abs(ref.om_f), 1e-3)
+                    or abs(phi) > self.rebase_angle):
+                return
+            om_new = ref.om_f + dom + phi / REBASE_TAU
+            x[n:] -= r * (om_new - ref.om_f)
+            ref.rebase(self.run.k, t, om_new)
         # the spectral bounds anew once the speed has moved by its own size since they last
-        # were; in between the last ones serve, with the integrator's margin (the turbine's)
-        fresh = abs(om_new - self._om_rho) > max(abs(self._om_rho), 1e-3)
+        # were (and with a new speed torque); in between the last ones serve, with the
+        # integrator's margin (the turbine's)
+        om = ref.om_f
+        fresh = force or abs(om - self._om_rho) > max(abs(self._om_rho), 1e-3)
         prev = self.system
+        self.grounded = self._grounded()
         system = PiecewiseLinearSystem(
-            self.asm, om_new * 60 / (2 * math.pi), geometry=self.geo, grounded=self.grounded,
+            self.asm, om / RPM, geometry=self.geo, grounded=self.grounded,
             spectral_bound=None if fresh else getattr(prev, "rho_bound", None),
             state_bound=None if fresh else getattr(prev, "state_bound", None))
         if fresh:
-            self._om_rho = om_new
+            self._om_rho = om
         if system.turning:
             system.use_loads(self.columns)
         else:
             self._F = system.f_const.copy()
-        ref.rebase(self.run.k, t, om_new)
         self.system = system
         self.run.rebase(system, x, ref.at(t))
+
+    def _diverged(self, k: int) -> None:
+        """Stop with a :class:`~gearmodal.SolveError` when the state at output step ``k`` is
+        not finite or beyond :data:`DIVERGED`: the method diverged (named, with the time)."""
+        x = self.run.x
+        big = float(np.abs(x).max(initial=0.0))
+        if math.isfinite(big) and big <= DIVERGED:
+            return
+        method = self.settings["method"]
+        raise SolveError(
+            "method", f"= {method!r}: the gearbox state diverged in the step ending at t = "
+            f"{k * self.dt:.3f} s (largest entry {big:.3g}, above {DIVERGED:g}); "
+            + ("Newmark switches contacts at step ends, which is unstable with stiff meshes "
+               "and a clearance (benchmarks/RESULTS.md, stability map): use method='exact'"
+               if method == "newmark" else "reduce dt or use method='exact'"))
 
     def _tables(self, X: np.ndarray):
         """``(q, v)`` rows of the result's tables from state rows ``X`` at the time reached
@@ -532,6 +669,8 @@ class Stepper:
         taken against the state's reference: the DOF's reference rotation and the rigid
         rotation moved out of the state so far (the spring's other end is in the state)."""
         u = given.copy()
+        if self.speed_torque is not None:  # its tangent's constant torque
+            u[self.load_index[self.asm.load_names[self._st_index[1]]]] += self._tau
         if host is not None:
             d, rho = self.drive, self.ratio[self._i_drive]
             rel = host[0] - rho * self.ref.at(k * self.dt) - self.offset * self._rigid_i()
@@ -610,9 +749,9 @@ class _Reference:
     calls' ends (``reference="follow"``); ``stretches``: ``(k, psi_f, om_f, t_f)`` from each
     re-basing's output step on."""
 
-    def __init__(self, omega: float):
-        self.psi_f, self.om_f, self.t_f = 0.0, float(omega), 0.0
-        self.stretches = [(0, 0.0, self.om_f, 0.0)]
+    def __init__(self, omega: float, psi0: float = 0.0):
+        self.psi_f, self.om_f, self.t_f = float(psi0), float(omega), 0.0
+        self.stretches = [(0, self.psi_f, self.om_f, 0.0)]
 
     def at(self, t):
         """The azimuth at time(s) ``t`` of the current stretch."""
