@@ -40,7 +40,9 @@ class Method:
     ``k_org``: the call continues a run at its output step ``k_org`` (``t0 = k_org dt``):
     ``azimuth0`` and the loads' times are then from the run's start, and so are the events'
     times returned. A method that ``chains`` walks the pieces one call would (the exact
-    method); the others are given times from the call's start."""
+    method); the others are given times from the call's start. ``t_span``: the call's start
+    and end times when they are not ``k dt`` (a stepper's re-basing grid, whose times do not
+    depend on ``dt``)."""
 
     name = ""
     options: tuple[str, ...] = ()
@@ -56,12 +58,13 @@ class Method:
 
     def run(self, system: PiecewiseLinearSystem, dt: float, n_steps: int, F: np.ndarray,
             x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0, loads=None, peaks=None,
-            t0: float = 0.0, k_org: int | None = None, **options):
+            t0: float = 0.0, k_org: int | None = None, t_span: tuple | None = None,
+            **options):
         if k_org is not None:
             if self.chains_with(options):
-                options = {**options, "k_org": k_org}
+                options = {**options, "k_org": k_org, "t_span": t_span}
             else:  # times from the call's start, the events' back from the run's
-                t_org = k_org * dt
+                t_org = k_org * dt if t_span is None else t_span[0]
                 if loads is not None:
                     loads = (np.asarray(loads[0], dtype=float) - t_org,) + tuple(loads[1:])
                 X, S, ev, st = self.run(system, dt, n_steps, F, x0, s0,
@@ -229,18 +232,20 @@ class Driver:
         self._X = self._S = None
 
     def advance(self, system: PiecewiseLinearSystem, n_steps: int, F: np.ndarray,
-                azimuth0: float = 0.0, loads=None, azimuths: np.ndarray | None = None) -> None:
+                azimuth0: float = 0.0, loads=None, azimuths: np.ndarray | None = None,
+                t_span: tuple | None = None) -> None:
         """Advance ``n_steps`` output steps with ``system`` and the force grid ``F``
         (``n_steps + 1`` rows), the input azimuth ``azimuth0`` (rad) at the first; ``loads``
         (times from this call's start) as :class:`Method`. ``azimuths``: the input azimuth
         at each of the ``n_steps + 1`` times, for the sink's force rows (alternating
-        meshes)."""
+        meshes). ``t_span``: the call's start and end times (chained; default ``k dt``)."""
         if self.peaks is None and self.peak_bin is not None:
             self.peaks = PeakTracker(system, self.peak_bin, turns=self.turning_points)
         X, S, ev, st = self.method.run(system, self.dt, n_steps, F, self.x, self.s,
                                        azimuth0=azimuth0, loads=loads, peaks=self.peaks,
-                                       t0=self.k * self.dt,
+                                       t0=self.k * self.dt if t_span is None else t_span[0],
                                        k_org=self.k if self.chained else None,
+                                       t_span=t_span if self.chained else None,
                                        **self.options)
         ev = event_rows(ev)
         if not self.chained:

@@ -128,7 +128,7 @@ def _check_finite(X: np.ndarray, dt: float) -> None:
 def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
               x0: np.ndarray, s0: np.ndarray, max_events_per_step: int = 200,
               propagator: str = "taylor", azimuth0: float = 0.0, loads=None, peaks=None,
-              t0: float = 0.0, k_org: int | None = None):
+              t0: float = 0.0, k_org: int | None = None, t_span: tuple | None = None):
     """Integrate ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
 
     ``F_grid`` (n_steps + 1, n) is the generalised force at the output times (linear in
@@ -161,7 +161,8 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     ``k_org``: the call continues a run at its output step ``k_org``
     (:class:`~gearmodal.integrate.driver.Method`, which gives it to the Taylor propagator
     only): ``azimuth0`` and the loads' times from the run's start, and the events' times
-    returned; the propagator walks the pieces one call would.
+    returned; the propagator walks the pieces one call would. ``t_span``: the call's start
+    and end times, when not ``k dt`` (a stepper's re-basing grid).
     """
     system.asm.require_piecewise_linear("method='exact'")
     if propagator not in PROPAGATORS:
@@ -190,7 +191,8 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         loads = None
     F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))  # input basis, if any
     if propagator == "taylor":
-        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0, loads, peaks, t0, k_org)
+        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0, loads, peaks, t0, k_org,
+                                 t_span)
         _check_finite(X, dt)
         return X, S, events, {"exponentials": 0, **integ.counts}
     prop = integ.prop

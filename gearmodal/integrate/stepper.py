@@ -51,6 +51,7 @@ plus its deflection.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -63,6 +64,7 @@ from ..errors import ModelError, SolveError, unknown
 from ..massscale import scaled_mass
 from ..model import validate as v
 from ..model.model import Model
+from ..static import equilibrium
 from . import (
     _initial,
     build_result,
@@ -146,7 +148,11 @@ class Stepper:
     method, options : the integration method and its options (:func:`gearmodal.simulate`).
     speed_rpm : input speed: gyroscopic and centrifugal terms, and the input azimuth turning
         at it (a turning geometry is integrated exactly, as :func:`gearmodal.simulate` does).
-    q0, v0 : initial displacements and velocities by DOF name.
+    q0, v0 : initial displacements and velocities by DOF name. ``q0="equilibrium"``: the
+        static equilibrium under the loads at time 0 (the speed torque's included) at
+        ``azimuth0`` and ``speed_rpm``; a drivetrain free to turn (one rigid rotation) is
+        taken accelerating rigidly under them, so that the teeth take up the first torque
+        without an impact (:meth:`_equilibrium`).
     peak_bin, turning_points : as :func:`gearmodal.simulate` (the exact peaks, turning points).
     out : a directory the result's tables stream to (:func:`gearmodal.simulate`'s ``out``):
         memory stays flat however long the host runs.
@@ -183,7 +189,8 @@ class Stepper:
         self.rebase_angle = _positive("rebase_angle", rebase_angle)
         self.rebase_steps = 0  # "follow" re-bases at every call's end
         if rebase_dt is not None:
-            self.rebase_steps = round(_positive("rebase_dt", rebase_dt) / float(dt))
+            self._rebase_dt = _positive("rebase_dt", rebase_dt)
+            self.rebase_steps = round(self._rebase_dt / float(dt))
             if self.rebase_steps < 1 or abs(self.rebase_steps * dt - rebase_dt) \
                     > GRID_TOL * rebase_dt:
                 raise ModelError("rebase_dt", f"= {rebase_dt!r}: must be a whole number of "
@@ -256,6 +263,13 @@ class Stepper:
         self._om_rho = self.omega  # the speed of the last full spectral bound (follow)
         n = asm.n
         self.n = n
+        if isinstance(q0, str):
+            if q0 != "equilibrium":
+                raise ModelError("q0", f"= {q0!r}: {{DOF name: value}} or 'equilibrium'")
+            if drive is not None:
+                raise ModelError("q0", "= 'equilibrium' with a drive: give q0 (the drive's "
+                                 "spring holds the state where the host's shaft is)")
+            q0 = self._equilibrium(psi0, float(speed_rpm))
         x = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
         s = system.penetration(x, psi0) > 0
         self.s_init = s.copy()
@@ -271,6 +285,9 @@ class Stepper:
         if not self.follow and not system.turning:
             self.rigid = _rigid_motion(asm.M, system.K0, system.C0, system.W, system.k,
                                        grounded)
+        if self.rigid is not None:  # its mass-weighted row and inertia, for its share of x
+            self._Mr = asm.M @ self.rigid
+            self._J = float(self.rigid @ self._Mr)
         self.offset = 0.0  # rigid rotation moved out so far, in units of ``rigid``
         self._rebases: list[tuple[int, float]] = []  # (output step, offset from then on)
         if drive is not None:
@@ -345,7 +362,17 @@ class Stepper:
     @property
     def time(self) -> float:
         """The time the gearbox has reached, s."""
-        return self.run.k * self.dt
+        return self._t(self.run.k)
+
+    def _t(self, k: int) -> float:
+        """The run's time at output step ``k``: ``k dt``; with ``rebase_dt``, the whole
+        re-basing steps in ``rebase_dt`` and the rest in ``dt``, so that the times on the
+        re-basing grid (a turbine's aerodynamic steps, where its calls end) and with them the
+        pieces do not depend on ``dt`` (``dt`` only places the rows)."""
+        if not self.rebase_steps:
+            return k * self.dt
+        q, r = divmod(k, self.rebase_steps)
+        return q * self._rebase_dt + r * self.dt if r else q * self._rebase_dt
 
     def advance(self, t: float, loads: dict | None = None, *, hold: str = "ramp",
                 start: dict | None = None, drive_angle: float | None = None,
@@ -378,7 +405,7 @@ class Stepper:
             raise ModelError("t", f"= {t!r}: must be after the time reached ({self.time!r} "
                              f"s) by a whole number of output steps dt = {self.dt!r} s")
         k0 = self.run.k
-        span = k1 * self.dt - k0 * self.dt
+        span = self._t(k1) - self._t(k0)
         given = self._given(self.u, loads, "loads")
         if start is not None and hold != "ramp":
             raise ModelError("start", "is the loads at a ramp's start: give it with "
@@ -413,11 +440,13 @@ class Stepper:
             ua, ub = self._load_values(ka, ga, ha), self._load_values(kb, gb, hb)
             # knots at the stretch's ends, from the run's start (k dt: as a load Series on
             # the same times gives them to one call)
-            timed = (np.array([ka * self.dt, kb * self.dt]), np.vstack([ua, ub]),
+            ta, tb = self._t(ka), self._t(kb)
+            timed = (np.array([ta, tb]), np.vstack([ua, ub]),
                      np.empty((0, len(ub))), np.empty(0), self._basis)
             F = np.tile(self._F, (kb - ka + 1, 1))
             self.run.advance(self.system, kb - ka, F, azimuth0=self.ref.origin(), loads=timed,
-                             azimuths=self.ref.at(np.arange(ka, kb + 1) * self.dt))
+                             azimuths=self.ref.at(np.arange(ka, kb + 1) * self.dt),
+                             t_span=(ta, tb) if self.rebase_steps else None)
             self._diverged(kb)
             ka = kb
         self.u = given
@@ -562,6 +591,30 @@ class Stepper:
             out[self.load_index[name]] = _number(f"{label}.{name}", val)
         return out
 
+    def _equilibrium(self, psi0: float, speed_rpm: float) -> dict:
+        """``q0="equilibrium"``: the static equilibrium (:func:`gearmodal.equilibrium`) under
+        the loads at time 0 at input azimuth ``psi0``. A drivetrain with one free rigid
+        rotation ``r`` cannot be in equilibrium under a net torque: it is taken accelerating
+        rigidly, the d'Alembert force ``-M r alpha`` added with ``alpha = r^T F / r^T M r``
+        (together the loads do no work on ``r``), and the rigid rotation taken out of the
+        result."""
+        asm = self.geo.assemble(psi0) if self.geo is not None else self.asm
+        loads = {asm.load_names[j]: float(u) for j, u in
+                 zip(self.columns, self._load_values(0, self.u, None), strict=True)}
+        r = self.rigid if self.rigid is not None else _rigid_motion(
+            asm.M, asm.K, asm.C, asm.contacts.W, asm.contacts.stiffness, damped=False)
+        if r is None:
+            q = equilibrium(asm, loads, speed_rpm).q.to_numpy()
+        else:
+            Mr = asm.M @ r
+            alpha = float(r @ asm.load_vector(loads)) / float(r @ Mr)
+            ext = dataclasses.replace(asm, B=np.column_stack([asm.B, -Mr]),
+                                      load_names=[*asm.load_names, "rigid_acceleration"])
+            q = equilibrium(ext, {**loads, "rigid_acceleration": alpha},
+                            speed_rpm).q.to_numpy()
+            q = q - r * float(Mr @ q) / float(r @ Mr)
+        return dict(zip(asm.dof_names, q, strict=True))
+
     def _follow_motion(self, asm) -> np.ndarray:
         """The drivetrain's rigid rotation scaled to the speed ratio of the wheel it turns
         most (``"follow"``'s reference motion)."""
@@ -599,16 +652,15 @@ class Stepper:
         (``force``) take the speed torque's tangent anew."""
         n, ref, t = self.n, self.ref, self.time
         self._force_rebase = False
-        x = self.run.x.copy()
+        x = self.run.x
         if self.follow:
-            r = self.rigid
-            Mr = self.asm.M @ r
-            J = float(r @ Mr)
+            r, Mr, J = self.rigid, self._Mr, self._J
             phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
             if not (force or abs(dom) > self.rebase_speed * max(abs(ref.om_f), 1e-3)
                     or abs(phi) > self.rebase_angle):
                 return
             om_new = ref.om_f + dom + phi / REBASE_TAU
+            x = x.copy()
             x[n:] -= r * (om_new - ref.om_f)
             ref.rebase(self.run.k, t, om_new)
         # the spectral bounds anew once the speed has moved by its own size since they last
@@ -673,7 +725,7 @@ class Stepper:
             u[self.load_index[self.asm.load_names[self._st_index[1]]]] += self._tau
         if host is not None:
             d, rho = self.drive, self.ratio[self._i_drive]
-            rel = host[0] - rho * self.ref.at(k * self.dt) - self.offset * self._rigid_i()
+            rel = host[0] - rho * self.ref.at(self._t(k)) - self.offset * self._rigid_i()
             u[self.load_index[self._drive_name]] += (
                 d.stiffness * rel + d.damping * (host[1] - rho * self.ref.om_f))
         return u
@@ -708,13 +760,6 @@ class Stepper:
         self.offset += phi
         self._rebases.append((k, self.offset))
 
-    @property
-    def _Mr(self) -> np.ndarray:
-        return self.asm.M @ self.rigid
-
-    @property
-    def _J(self) -> float:
-        return float(self.rigid @ self._Mr)
 
     def _absolute(self, X: np.ndarray, rows: np.ndarray | None = None):
         """``(q, v)`` of state rows ``X`` with the rigid rotation moved out added back:

@@ -113,7 +113,7 @@ class PiecewiseLinearSystem:
                 W, off = const["contacts.W"], const["contacts.offset"]
         self.K0 = K + om**2 * asm.K_cent
         self.C0 = C + om * asm.G
-        self.C_extra = None  # add_damping, grounded
+        self.C_extra = None  # grounded
         self.K_extra = None  # grounded
         for dof, kg, cg in grounded:
             if self.K_extra is None:
@@ -180,17 +180,6 @@ class PiecewiseLinearSystem:
         B = self.at(azimuth, ("B",))["B"][:, cols]
         F = B @ u[:len(cols)]
         return F + self.f_const * u[-1] if constant else F
-
-    def add_damping(self, dof: int, value: float) -> None:
-        """Add a viscous damper ``value`` (N m s/rad or N s/m) on coordinate ``dof`` (the
-        generator's tangent slip damping in the turbine run); before the first propagation."""
-        if "_exact_integrators" in self.__dict__:
-            raise ModelError("damping", "add dampers before the first propagation")
-        if self.C_extra is None:
-            self.C_extra = np.zeros((self.n, self.n))
-        self.C_extra[dof, dof] += value
-        self.C0 = self.C0.copy()
-        self.C0[dof, dof] += value
 
     #: input azimuth at the run's start (rad): set by the run (turning geometry, alternation)
     azimuth0 = 0.0

@@ -1232,7 +1232,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT,
                reach, per_state, Ksym, Wl, km, c0, kappa, rho_keys, rho_vals, TL, FL, MinvUL,
                GTL, HX, HNU, track, EP, PB, pbin, PC, PM, PN, t_call, sptr, sidx, sval, sk,
-               sc, chp, TCH, TCW, TS, TP, ntp, k_org, carry, MKC_in, acc_in):
+               sc, chp, TCH, TCW, TS, TP, ntp, k_org, carry, MKC_in, acc_in, t_span):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
 
     ``F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
@@ -1292,6 +1292,10 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     > 0``: ``MKC_in``, ``acc_in`` are its state matrices, then its refresh count, dense flag,
     lazy-bound flag and count, piece limit and term scale) and is written at the end, so that
     the calls walk the pieces one call would. The call returns ``MKC``, ``acc`` last.
+    ``t_span`` (2,): the call's start and end times when the caller gives them (a stepper on
+    its re-basing grid, whose times do not depend on ``dt``): the pieces start and end there
+    and the last row is the end state; empty: ``(k0 + k_org) dt`` and ``(n_steps + k_org)
+    dt``.
     """
     N = x.shape[0]
     n = N // 2
@@ -1423,12 +1427,15 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     k = k0
     ip = sched_pos[0]
     n_sched = sched_t.shape[0]
+    # given times: the call's last row is its end state, whatever dt's rounding of its time
+    spanned = t_span.shape[0] == 2
+    j_in = n_steps - 1 if spanned else n_steps  # the last row read off a piece's series
     while k < n_steps:
         # the output steps from k on whose forces lie on one line: one stretch of pieces (the
         # force has no kink inside it), outputs read off the pieces' series
         k2 = _stretch(F, k, n_steps)
-        tk = (k + k_org) * dt
-        t_end = (k2 + k_org) * dt
+        tk = t_span[0] if (spanned and k == 0) else (k + k_org) * dt
+        t_end = t_span[1] if (spanned and k2 == n_steps) else (k2 + k_org) * dt
         jn = k + 1  # the next output time to write
         # M^-1 F at the stretch start and its rate (first-order hold), once per stretch: the
         # rate from the stretch's ends, so that the force (and the solution) does not depend
@@ -1704,12 +1711,12 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 if il + 2 < nk and TL[il + 1] - t < simultaneous:
                     t = max(t, TL[il + 1])  # exactly at the load knot
                 # the output times this piece passed: from its series (its end: the end state)
-                while jn <= k2 and (jn + k_org) * dt < t - 1e-13 * dt:
+                while jn <= k2 and jn <= j_in and (jn + k_org) * dt < t - 1e-13 * dt:
                     _evaluate(Bv, ((jn + k_org) * dt - t_old) / h, h, qo, vo)
                     _write(X, S, jn, qo, vo, s)
                     jn += 1
                     count = 0
-                if jn <= k2 and (jn + k_org) * dt <= t + 1e-13 * dt:
+                if jn <= k2 and jn <= j_in and (jn + k_org) * dt <= t + 1e-13 * dt:
                     _write(X, S, jn, qb, vb, s)
                     jn += 1
                     count = 0
@@ -1743,7 +1750,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                                    TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_, pe_,
                                    pwork, stk)
                 jumped[:] = False
-            while jn <= k2 and (jn + k_org) * dt < t_ev - 1e-13 * dt:  # outputs before the event
+            while jn <= k2 and jn <= j_in and (jn + k_org) * dt < t_ev - 1e-13 * dt:
                 _evaluate(Bv, ((jn + k_org) * dt - t) / h, h, qo, vo)
                 _write(X, S, jn, qo, vo, s)
                 jn += 1
@@ -1824,7 +1831,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
                 toggled = 0
             # an output time at the event: the state after it
-            while jn <= k2 and (jn + k_org) * dt <= t + 1e-13 * dt:
+            while jn <= k2 and jn <= j_in and (jn + k_org) * dt <= t + 1e-13 * dt:
                 _write(X, S, jn, q, v, s)
                 jn += 1
                 count = 0
@@ -2043,6 +2050,7 @@ class TaylorIntegrator:
         self.sys = system
         self.dt = float(dt)
         self.max_events = int(max_events_per_step)
+        self._basis_maps = None  # _loads: (basis, its rows, M^-1 rows, turning rows)
         Minv = system.Minv
         self.MK0 = np.ascontiguousarray(Minv @ system.K0)
         self.MC0 = np.ascontiguousarray(Minv @ system.C0)
@@ -2094,7 +2102,7 @@ class TaylorIntegrator:
 
     def run(self, n_steps: int, F: np.ndarray, x0: np.ndarray, s0: np.ndarray,
             azimuth0: float = 0.0, loads=None, peaks=None, t0: float = 0.0,
-            k_org: int | None = None):
+            k_org: int | None = None, t_span: tuple | None = None):
         """``(X, S, events)`` over ``n_steps`` output steps (see :func:`run_exact`); the input
         azimuth at the start is ``azimuth0`` (rad: alternating mesh stiffness, turning
         geometry); ``loads``: ``(knot_t, knot_u, harmonic_u, harmonic_nu, basis)`` added to
@@ -2106,12 +2114,18 @@ class TaylorIntegrator:
         (:class:`~gearmodal.integrate.stepper.Stepper`): times from the run's start (the
         knots' too, and the events'), ``azimuth0`` the azimuth at the run's start, the
         kernel's state where the last call left it, so that a run chopped into calls walks the
-        pieces of one call; None: a call of its own (times from its start)."""
+        pieces of one call; None: a call of its own (times from its start). ``t_span``: the
+        call's start and end times from the run's start (with ``k_org``), when the caller's
+        times are not ``k dt`` (:func:`taylor_run`)."""
         sysm = self.sys
         last = getattr(self, "_carry", None)  # (k, s, arrays) where the last call ended
         chained = (k_org is not None and last is not None and last[0] == k_org
                    and np.array_equal(last[1], s0))
         t_org = 0.0 if k_org is None else k_org * self.dt
+        span = np.empty(0)
+        if t_span is not None and k_org is not None:
+            span = np.array([float(t_span[0]), float(t_span[1])])
+            t_org = span[0]
         TL, FL, MinvUL, GTL, HX, HNU = self._loads(loads, azimuth0)
         if chained:
             kc = self._kc  # as the last call left it (its stiffness changes applied)
@@ -2161,7 +2175,7 @@ class TaylorIntegrator:
             counts, *sched, sched_pos, sysm.omega, float(azimuth0), *self.turning, self.reach,
             *self.state_bound.args(), TL, FL, MinvUL, GTL, HX, HNU, *track,
             float(t0) if k_org is None else 0.0, *rows, *turns,
-            0 if k_org is None else int(k_org), carry, MKC, acc)
+            0 if k_org is None else int(k_org), carry, MKC, acc, span)
         if k_org is not None:
             self._carry = ((k_org + n_steps, S[-1].copy(), (carry, MKC, acc)) if status == 0
                            else None)
@@ -2198,12 +2212,18 @@ class TaylorIntegrator:
                     np.empty((H1, n, 0), dtype=complex), np.empty((0, n), dtype=complex),
                     np.empty(0))
         kt, ku, hu, hnu, basis = loads
-        # the load columns' force rows in the integrator's basis (reduce: an input basis)
-        rows = sysm.reduce(np.ascontiguousarray(np.asarray(basis, dtype=float).T))  # (mL, m)
-        MinvUL = np.ascontiguousarray(self.MinvU @ rows.T)
-        harm, GT = self.turning[0], self.turning[-1]
-        GTL = (np.ascontiguousarray(np.einsum("hij,lj->hil", GT, rows)) if sysm.turning
-               else np.zeros((H1, n, rows.shape[0]), dtype=complex))
+        harm = self.turning[0]
+        cached = self._basis_maps
+        if cached is not None and cached[0] is basis:  # a stepper's calls: the same basis
+            rows, MinvUL, GTL = cached[1:]
+        else:
+            # the load columns' force rows in the integrator's basis (reduce: an input basis)
+            rows = sysm.reduce(np.ascontiguousarray(np.asarray(basis, dtype=float).T))
+            MinvUL = np.ascontiguousarray(self.MinvU @ rows.T)
+            GTL = (np.ascontiguousarray(np.einsum("hij,lj->hil", self.turning[-1], rows))
+                   if sysm.turning else np.zeros((H1, n, rows.shape[0]), dtype=complex))
+            if isinstance(basis, np.ndarray):
+                self._basis_maps = (basis, rows, MinvUL, GTL)
         HX, HNU = [], []
         for u, nu in zip(np.asarray(hu, dtype=complex), np.asarray(hnu, dtype=float),
                          strict=True):
