@@ -108,6 +108,10 @@ def test_bad_input_names_the_field(parts):
     pair = gm.load("studies/models/gear_pair.toml")
     with pytest.raises(gm.ModelError, match="rotor"):
         simulate_drivetrain(tb, wind, pair, 0.1)
+    geared = gb.copy()
+    geared.bodies["rotor"].speed_ratio = 2.0
+    with pytest.raises(gm.ModelError, match="rotor.speed_ratio"):
+        simulate_drivetrain(tb, wind, geared, 0.1)
 
 
 def test_turbine_scene_cli_writes_loads_events_forces_figures(tmp_path):

@@ -189,11 +189,59 @@ def test_bad_construction(pair):
         gm.Stepper(pair, dt=1e-4, drive=gm.Drive("pinion.theta", -1.0))
     with pytest.raises(gm.ModelError, match="loads.nope"):
         gm.Stepper(pair, dt=1e-4, loads={"nope": 1.0})
+    with pytest.raises(TypeError, match="gm.Drive"):
+        gm.Stepper(pair, dt=1e-4, drive=("pinion.theta", 1e3, 0.0))
+    with pytest.raises(gm.ModelError, match="speed_torque.law"):
+        gm.Stepper(pair, dt=1e-4, speed_torque=gm.SpeedTorque("wheel.theta", lambda w: 1.0))
+    with pytest.raises(gm.ModelError, match="q0"):
+        gm.Stepper(pair, dt=1e-4, q0="rest")
     st = gm.Stepper(pair, dt=1e-4, loads={"pinion.torque": 1.0})
+    with pytest.raises(gm.ModelError, match="speed_torque"):
+        st.set_speed_torque(gm.SpeedTorque("wheel.theta", lambda w: (0.0, 0.0)))
+    st.reserve(0.001)
+    with pytest.raises(gm.ModelError, match="reserve"):
+        st.reserve(0.002)
+    with pytest.raises(gm.ModelError, match="beyond the rows reserved"):
+        st.advance(0.002)  # refused before integrating: the run is still at 0
     st.advance(0.001)
     st.result()
     with pytest.raises(gm.ModelError, match="finished"):
         st.advance(0.002)
+
+
+@pytest.mark.parametrize("reference", ["fixed", "follow"])
+def test_speed_torque_settles_where_the_torques_balance(pair, reference):
+    """A torque falling linearly with the wheel's speed, ``tau(w) = -c (w - w_s)`` (an
+    induction generator's tangent), against a constant pinion torque ``T``: the pair settles
+    where the work balances, ``T + r tau(w) = 0`` (``r`` the wheel's speed per pinion speed),
+    ``w = w_s + T / (r c)``. The slope acts as a damper in the equations (implicit: calls of
+    10 ms against the pair's 1.4 s time constant). The following reference takes the law's
+    tangent anew at each re-basing; the fixed one at the start (exact for a linear law)."""
+    c, w_s, torque = 2.0, -50.0, 10.0
+    r = pair.bodies["wheel"].speed_ratio
+    law = gm.SpeedTorque("wheel.theta", lambda w: (-c * (w - w_s), -c))
+    st = gm.Stepper(pair, dt=1e-3, loads={"pinion.torque": torque}, speed_rpm=600.0,
+                    speed_torque=law, reference=reference, q0="equilibrium",
+                    outputs=["wheel.theta.velocity"])
+    for k in range(1, 801):
+        out = st.advance(k * 1e-2)
+    assert out["wheel.theta.velocity"] == pytest.approx(w_s + torque / (r * c), abs=1e-4)
+
+
+def test_speed_torque_set_before_the_first_call(pair):
+    """A law set before the first call acts from the start: the run of a stepper made with
+    it, to rounding."""
+    off = gm.SpeedTorque("wheel.theta", lambda w: (0.0, 0.0))
+    on = gm.SpeedTorque("wheel.theta", lambda w: (-2.0 * (w + 50.0), -2.0))
+    kw = dict(dt=1e-3, loads={"pinion.torque": 10.0}, speed_rpm=600.0,
+              outputs=["wheel.theta.velocity"])
+    a = gm.Stepper(pair, speed_torque=on, **kw)
+    b = gm.Stepper(pair, speed_torque=off, **kw)
+    b.set_speed_torque(on)
+    ya, yb = a.advance(0.5), b.advance(0.5)
+    assert yb["wheel.theta.velocity"] == pytest.approx(ya["wheel.theta.velocity"], rel=1e-12)
+    assert abs(ya["wheel.theta.velocity"] - 600 * math.pi / 30 * pair.bodies["wheel"]
+               .speed_ratio) > 1.0  # the law acted
 
 
 def _spin_inputs(t_end, h):

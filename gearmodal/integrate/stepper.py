@@ -35,7 +35,8 @@ the drivetrain: the input azimuth ``psi(t)``, every wheel at its ``speed_ratio``
   :data:`REBASE_ANGLE` at a call's end: exact, since that motion changes no force, and it keeps
   the state's rounding at the size of the deflections however many turns a run makes.
 - ``reference="follow"``: the reference follows the drivetrain, as the turbine run's does
-  (:mod:`gearmodal.turbine.drivetrain`): at a call's end where the drivetrain's speed has left
+  (:mod:`gearmodal.turbine.drivetrain`): at a call's end (taken at the next call's start, so
+  that a call's outputs are the state it reached) where the drivetrain's speed has left
   the reference speed by ``rebase_speed`` of it, or its rigid rotation the reference by
   ``rebase_angle``, the reference speed becomes the drivetrain's plus ``phi / REBASE_TAU``
   (the azimuth stays continuous: no jump of the turning geometry), the speed terms are taken
@@ -43,7 +44,10 @@ the drivetrain: the input azimuth ``psi(t)``, every wheel at its ``speed_ratio``
   its gap switches there, logged. What a host driving a planetary stage through its shaft at a
   varying speed needs: the geometry turns with the carrier. With ``rebase_dt`` it re-bases
   only every ``rebase_dt`` from the start (a call is split there), so that the run does not
-  depend on where the calls end.
+  depend on where the calls end, and the times on that grid are whole multiples of
+  ``rebase_dt``, so that it does not depend on ``dt`` either (``dt`` only places the rows).
+  The state is then the deflection from the drivetrain's rigid rotation; the ``speed_rpm``
+  given is the reference's at the start (the result's settings: ``speed0_rpm``).
 
 Angles and speeds out (a rotation DOF's output) are absolute: the wheel's reference rotation
 plus its deflection.
@@ -187,7 +191,7 @@ class Stepper:
         self.follow = reference == "follow"
         self.rebase_speed = _positive("rebase_speed", rebase_speed)
         self.rebase_angle = _positive("rebase_angle", rebase_angle)
-        self.rebase_steps = 0  # "follow" re-bases at every call's end
+        self.rebase_steps = 0  # "follow" may re-base at every call's end
         if rebase_dt is not None:
             self._rebase_dt = _positive("rebase_dt", rebase_dt)
             self.rebase_steps = round(self._rebase_dt / float(dt))
@@ -226,6 +230,8 @@ class Stepper:
         cols = {names.index(nm) for nm in loads}
         grounded = ()
         if drive is not None:
+            if not isinstance(drive, Drive):
+                raise TypeError(f"drive: expected a gm.Drive, got {type(drive).__name__}")
             self._i_drive, j = self._torque_column(drive.dof, "drive")
             cols.add(j)
             self._drive_name = names[j]
@@ -307,7 +313,8 @@ class Stepper:
                           turning_points=turning_points, chained=True, **options)
         self.fmap = ForceMap(system)
         self.settings = {"model": model.name, "method": method, "dt": self.dt,
-                         "speed_rpm": speed_rpm, "peak_bin": peak_bin,
+                         "speed_rpm": None if self.follow else speed_rpm,
+                         "speed0_rpm": speed_rpm, "peak_bin": peak_bin,
                          "turning_points": turning_points, "options": options,
                          "loads": {k: float(x) for k, x in loads.items()},
                          "drive": None if drive is None else {
@@ -332,6 +339,7 @@ class Stepper:
         # the force rows cost a mesh stiffness and a force map per call: only when asked for
         self._forces = any(name in self.fmap.labels for name in self.outputs)
         self._force_rebase = False  # set_speed_torque: re-base at the next call's start
+        self._reserved = None  # reserve(): the output steps held
         self._cpu = time.process_time() - cpu
         self._done = None
 
@@ -405,6 +413,9 @@ class Stepper:
             raise ModelError("t", f"= {t!r}: must be after the time reached ({self.time!r} "
                              f"s) by a whole number of output steps dt = {self.dt!r} s")
         k0 = self.run.k
+        if self._reserved is not None and k1 > self._reserved:
+            raise ModelError("t", f"= {t!r}: beyond the rows reserved (reserve(t_end) up to "
+                             f"{self._t(self._reserved)!r} s)")
         span = self._t(k1) - self._t(k0)
         given = self._given(self.u, loads, "loads")
         if start is not None and hold != "ramp":
@@ -431,15 +442,15 @@ class Stepper:
             ends = list(range((k0 // m + 1) * m, k1, m)) + [k1]
         ka = k0
         for kb in ends:
-            if ka and (self._force_rebase or (self.follow and (
-                    not self.rebase_steps or ka % self.rebase_steps == 0))):
+            if self._force_rebase or (ka and self.follow and (
+                    not self.rebase_steps or ka % self.rebase_steps == 0)):
                 self._follow(force=self._force_rebase)
             # the inputs linear over the call (its ends' values exactly at its ends)
             ga, ha = _between(ka, k0, k1, g0, given), _between(ka, k0, k1, host0, host1)
             gb, hb = _between(kb, k0, k1, g0, given), _between(kb, k0, k1, host0, host1)
             ua, ub = self._load_values(ka, ga, ha), self._load_values(kb, gb, hb)
-            # knots at the stretch's ends, from the run's start (k dt: as a load Series on
-            # the same times gives them to one call)
+            # knots at the stretch's ends, from the run's start (_t(k): k dt as a load Series
+            # on the same times gives them to one call, or on the re-basing grid)
             ta, tb = self._t(ka), self._t(kb)
             timed = (np.array([ta, tb]), np.vstack([ua, ub]),
                      np.empty((0, len(ub))), np.empty(0), self._basis)
@@ -497,17 +508,22 @@ class Stepper:
         rows would not fit. Nothing to do when the rows stream to ``out`` or are not kept."""
         if self.sink is not None:
             return
+        if self._reserved is not None:
+            raise ModelError("reserve", f"was called already (up to step {self._reserved})")
         n_steps = round(_positive("t_end", t_end) / self.dt)
         nsp = len(self.asm.springs) if self.asm.springs is not None else 0
         check_fits(n_steps + 1, 4 * self.n + len(self.asm.contacts.element) + nsp,
                    "give out=DIR (the rows go to disk as the run goes; gearmodal simulate "
                    "does), a longer dt or a shorter t_end")
         self.run.reserve(n_steps)
+        self._reserved = n_steps
 
     def set_speed_torque(self, speed_torque: SpeedTorque) -> None:
         """Replace the speed-dependent torque (same DOF; a generator switched onto the grid)
-        from the time reached: the reference is re-based at the next call's start, its
-        tangent taken there and the spectral bounds anew."""
+        from the time reached: the reference is re-based at the next call's start (before the
+        first call: now), its tangent taken there and the spectral bounds anew. With
+        ``rebase_dt``, call it at a call end on the re-basing grid: elsewhere the run then
+        re-bases where the call ends (and depends on it)."""
         if self.speed_torque is None:
             raise ModelError("speed_torque", "the stepper was made without one: give "
                              "speed_torque= at construction")
@@ -517,6 +533,8 @@ class Stepper:
                              f"{self.speed_torque.dof!r}")
         self.speed_torque = speed_torque
         self._force_rebase = True
+        if self.run.k == 0:  # the start's system made anew (nothing integrated with it yet)
+            self._follow(force=True, move=False)
 
     def result(self, settings: dict | None = None,
                stats: dict | None = None) -> SimulationResult:
@@ -536,7 +554,7 @@ class Stepper:
                  "n_steps": run.k,
                  "n_rebases": len(self.ref.stretches) - 1 if self.follow else len(self._rebases),
                  **(stats or {})}
-        t_end = run.k * self.dt
+        t_end = self._t(run.k)
         settings = {**self.settings, "t_end": t_end, **(settings or {})}
         if self.sink is not None:
             self._done = stored_result(self.sink, self.system, self.s_init, stats, settings,
@@ -639,21 +657,26 @@ class Stepper:
         if self.speed_torque is not None:
             i = self._st_index[0]
             w = float(self.ratio[i]) * self.ref.om_f
-            tau, dtau = self.speed_torque.law(w)
+            try:
+                tau, dtau = self.speed_torque.law(w)
+            except (TypeError, ValueError):
+                raise ModelError("speed_torque.law", f"at {w!r} rad/s: must return (torque, "
+                                 "dtorque/dspeed), two numbers") from None
             self._tau = _number("speed_torque.law's torque", tau)
             dtau = _number("speed_torque.law's derivative", dtau)
             if dtau:
                 out = out + ((i, 0.0, -dtau),)
         return out
 
-    def _follow(self, force: bool = False) -> None:
+    def _follow(self, force: bool = False, move: bool = True) -> None:
         """Re-base the reference rotation at the time reached where the drivetrain has left
         it (``reference="follow"``: module docstring; as the turbine run's re-basing), or
-        (``force``) take the speed torque's tangent anew."""
+        (``force``) take the speed torque's tangent anew; ``move=False``: at the reference
+        as it is (the start)."""
         n, ref, t = self.n, self.ref, self.time
         self._force_rebase = False
         x = self.run.x
-        if self.follow:
+        if self.follow and move:
             r, Mr, J = self.rigid, self._Mr, self._J
             phi, dom = float(Mr @ x[:n]) / J, float(Mr @ x[n:]) / J
             if not (force or abs(dom) > self.rebase_speed * max(abs(ref.om_f), 1e-3)
@@ -693,7 +716,7 @@ class Stepper:
         method = self.settings["method"]
         raise SolveError(
             "method", f"= {method!r}: the gearbox state diverged in the step ending at t = "
-            f"{k * self.dt:.3f} s (largest entry {big:.3g}, above {DIVERGED:g}); "
+            f"{self._t(k):.3f} s (largest entry {big:.3g}, above {DIVERGED:g}); "
             + ("Newmark switches contacts at step ends, which is unstable with stiff meshes "
                "and a clearance (benchmarks/RESULTS.md, stability map): use method='exact'"
                if method == "newmark" else "reduce dt or use method='exact'"))
@@ -790,8 +813,8 @@ class _Discard:
 
 
 class _Reference:
-    """The reference input azimuth ``psi(t) = psi_f + om_f (t - t_f)`` (rad), re-based at
-    calls' ends (``reference="follow"``); ``stretches``: ``(k, psi_f, om_f, t_f)`` from each
+    """The reference input azimuth ``psi(t) = psi_f + om_f (t - t_f)`` (rad), re-based
+    between calls (``reference="follow"``); ``stretches``: ``(k, psi_f, om_f, t_f)`` from each
     re-basing's output step on."""
 
     def __init__(self, omega: float, psi0: float = 0.0):

@@ -364,6 +364,7 @@ def couple(turbine: Turbine, wind: Wind, gearbox, t_end: float, *, dt: float = 2
                 "rebase_speed": rebase_speed, "rebase_angle": rebase_angle,
                 "method": method, "options": options, "gravity_mps2": g,
                 "turning_points": turning_points, "top_frequency_hz": top_frequency_hz,
+                "mass_scaling": st.settings["mass_scaling"], "speed_rpm": None,
                 "shaft_end_force": "on the carrier" if plant.bending else "not modelled (the "
                 "first stage's carrier has no translation)",
                 "wind": {k: v for k, v in vars(wind).items() if not k.startswith("_")}}
@@ -383,3 +384,7 @@ def _check_drivetrain(gearbox) -> None:
             raise ModelError("gearbox", f"has no DOF {name!r}: the drivetrain model needs "
                              "bodies 'rotor' and 'generator' (see studies/models/600kw.toml)")
     rigid_rotation(asm)
+    ratio = gearbox.bodies["rotor"].speed_ratio
+    if ratio != 1.0:
+        raise ModelError("gearbox.rotor.speed_ratio", f"= {ratio!r}: the rotor is the "
+                         "drivetrain's input, 1 (its azimuth is the blades')")
