@@ -60,9 +60,8 @@ def test_spectral_bound(drivetrain, speed, damping):
 
 def test_input_basis_rejects_a_force_outside_it(drivetrain):
     asm = drivetrain.assemble(azimuth=0.3)
-    sy = PiecewiseLinearSystem(asm, 22.1)
     j = asm.load_names.index("rotor.torque")
-    sy.set_inputs(asm.B[:, [j]])
+    sy = PiecewiseLinearSystem(asm, 22.1, inputs=asm.B[:, [j]])
     assert sy.P.shape[1] < asm.n  # the torque column plus the back flanks' offset forces
     F = np.outer([1.0, 2.0], asm.B[:, j])
     assert np.allclose(sy.reduce(F) @ sy.P.T, F)

@@ -199,22 +199,19 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
                "t_end")
     t = np.arange(n_steps + 1) * dt
     cpu = time.process_time()
-    system = PiecewiseLinearSystem(asm, speed_rpm, geometry=geo)
-    system.azimuth0 = 0.0
+    # the loads on their own time structure (constants, knots, harmonics), as values of the
+    # load map's columns (fixed in their bodies' axes: a turning map carries them round)
+    paths = load_paths(asm.load_names, loads, float(n_steps * dt), float(load_dt))
+    used = paths.used()
+    system = PiecewiseLinearSystem(asm, speed_rpm, geometry=geo, load_columns=used)
     if casm is None:
         x = np.concatenate([_initial(asm, q0, "q0"), _initial(asm, v0, "v0")])
     else:
         x = np.concatenate([_initial_coupled(casm, q0, "q0"), _initial_coupled(casm, v0, "v0")])
     s = system.penetration(x) > 0
     s_init = s.copy()
-    # the loads on their own time structure (constants, knots, harmonics), as values of the
-    # load map's columns (fixed in their bodies' axes: a turning map carries them round)
-    paths = load_paths(asm.load_names, loads, float(n_steps * dt), float(load_dt))
-    used = paths.used()
     part = paths.columns(used)
-    if system.turning:
-        # loads fixed in their bodies' axes, the load map turning: load values, not forces
-        system.use_loads(used)
+    if system.turning:  # loads fixed in their bodies' axes, the map turning: load values
         F = np.tile(np.append(part.constant, 1.0), (n_steps + 1, 1))  # the last: f_const
         basis = np.eye(len(used) + 1, len(used))
     else:

@@ -254,9 +254,6 @@ class Driver:
         if self.peaks is not None:
             self.peaks.turns.drain(self.sink)
         new = not self.segments or self.segments[-1][2] is not system
-        if new:  # the stretch's start (its tables' azimuths; chained: azimuth0 is at 0)
-            system.azimuth0 = azimuth0 + (system.omega * self.k * self.dt if self.chained
-                                          else 0.0)
         if self.sink is not None:
             a = 0 if self.k == 0 else 1  # the first call writes the initial row too
             seg_k0 = self.k if new else self.segments[-1][0]

@@ -21,6 +21,8 @@ limit on what is detected.
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from ..errors import ModelError, SolveError
@@ -32,6 +34,20 @@ from .taylor import TaylorIntegrator
 #: how the exact method propagates a contact state: "taylor" (series of the exact solution,
 #: all in numba, no per-state setup) or "expm" (cached augmented exponentials per state)
 PROPAGATORS = ("taylor", "expm")
+#: the integrators of each system (the method owns them, the system is a value): callers that
+#: advance one system in several calls (a stepper) keep its propagators and bounds
+_INTEGRATORS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def shared_bounds(system: PiecewiseLinearSystem) -> tuple:
+    """``(spectral bound, per-state bounds)`` the Taylor propagator computed for ``system``,
+    which a system differing from it only in its speed terms may reuse
+    (``PiecewiseLinearSystem(spectral_bound=..., state_bound=...)``); ``(None, None)`` when it
+    has not run on it."""
+    for integ in _INTEGRATORS.get(system, {}).values():
+        if isinstance(integ, TaylorIntegrator):
+            return integ.shared
+    return None, None
 
 #: samples of the Taylor polynomial used to bracket the first root inside a Taylor piece
 TAYLOR_SAMPLES = 33
@@ -179,7 +195,7 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     # the propagators belong to the frozen system: callers that advance one system in several
     # calls (the turbine co-simulation) keep them
     key = (propagator, float(dt), int(max_events_per_step))
-    cache = system.__dict__.setdefault("_exact_integrators", {})
+    cache = _INTEGRATORS.setdefault(system, {})
     integ = cache.get(key)
     if integ is None:
         kind = TaylorIntegrator if propagator == "taylor" else ExactIntegrator

@@ -78,6 +78,7 @@ from . import (
 )
 from .azimuth import AzimuthAssembler
 from .driver import Driver, check_fits, get_method
+from .exact import shared_bounds
 from .peaks import PEAK_BIN
 from .record import ForceMap, Recorder
 from .result import SimulationResult
@@ -262,8 +263,8 @@ class Stepper:
         self._tau = 0.0  # the speed torque's constant part, N m
         grounded = self._grounded()
         cpu = time.process_time()
-        system = PiecewiseLinearSystem(asm, speed_rpm, geometry=self.geo, grounded=grounded)
-        system.azimuth0 = psi0
+        system = PiecewiseLinearSystem(asm, speed_rpm, geometry=self.geo, grounded=grounded,
+                                       load_columns=self.columns, azimuth0=psi0)
         self.system = system
         self.grounded = grounded
         self._om_rho = self.omega  # the speed of the last full spectral bound (follow)
@@ -280,7 +281,6 @@ class Stepper:
         s = system.penetration(x, psi0) > 0
         self.s_init = s.copy()
         if system.turning:  # load values through the turning load map, f_const last
-            system.use_loads(self.columns)
             self._F = np.append(np.zeros(len(self.columns)), 1.0)
             self._basis = np.eye(len(self.columns) + 1, len(self.columns))
         else:
@@ -691,17 +691,18 @@ class Stepper:
         # integrator's margin (the turbine's)
         om = ref.om_f
         fresh = force or abs(om - self._om_rho) > max(abs(self._om_rho), 1e-3)
-        prev = self.system
+        rho, sb = (None, None) if fresh else shared_bounds(self.system)
         self.grounded = self._grounded()
+        # the stretch's start azimuth: its tables' times count from there (as the driver
+        # takes it: the origin plus the system's speed times the run's output time)
+        speed_rpm = om / RPM
+        az0 = ref.origin() + float(speed_rpm) * RPM * self.run.k * self.dt
         system = PiecewiseLinearSystem(
-            self.asm, om / RPM, geometry=self.geo, grounded=self.grounded,
-            spectral_bound=None if fresh else getattr(prev, "rho_bound", None),
-            state_bound=None if fresh else getattr(prev, "state_bound", None))
+            self.asm, speed_rpm, geometry=self.geo, grounded=self.grounded,
+            spectral_bound=rho, state_bound=sb, load_columns=self.columns, azimuth0=az0)
         if fresh:
             self._om_rho = om
-        if system.turning:
-            system.use_loads(self.columns)
-        else:
+        if not system.turning:
             self._F = system.f_const.copy()
         self.system = system
         self.run.rebase(system, x, ref.at(t))

@@ -54,19 +54,31 @@ class PiecewiseLinearSystem:
         its turning harmonics in ``periodic`` (:mod:`gearmodal.integrate.periodic`), integrated
         exactly by the Taylor propagator; :meth:`at` gives the frozen matrices at any azimuth
         (the reference methods).
-    spectral_bound : the ``rho_bound`` of a system that differs from this one only in its speed
-        terms (1/s), reused with a small margin instead of computing a new bound.
-    state_bound : that system's ``state_bound`` (per contact state), reused likewise.
+    spectral_bound : the spectral bound of a system that differs from this one only in its
+        speed terms (1/s; :func:`~gearmodal.integrate.exact.shared_bounds`), reused with a
+        small margin instead of computing a new bound.
+    state_bound : that system's per-state bounds, reused likewise.
     grounded : ``(dof, stiffness, damping)`` springs from coordinates to ground (N/m or N m/rad,
         N s/m or N m s/rad): the spring-damper through which a co-simulation host drives a
         shaft (:class:`~gearmodal.integrate.stepper.Drive`). On a coordinate about a wheel's
         own axis it is the same in every frame, so a turning system holds it in its constant
         part.
+    load_columns : on a turning system, the run's forces given as values of these columns of
+        the load map, the constant centrifugal force last (:meth:`_use_loads`: the map turns,
+        the loads stay in their own axes); a frozen system takes generalised forces and
+        ignores it.
+    azimuth0 : the input azimuth at the start of the stretch this system is integrated over
+        (rad; its tables' times count from there).
+
+    The system is a value: nothing changes it after construction. The integration methods
+    keep what they compute for it (propagators, spectral bounds) in their own caches
+    (:func:`gearmodal.integrate.exact.shared_bounds`).
     """
 
     def __init__(self, asm: Assembly, speed_rpm: float = 0.0, inputs: np.ndarray | None = None,
                  geometry=None, spectral_bound: float | None = None, state_bound=None,
-                 grounded: tuple = ()):
+                 grounded: tuple = (), load_columns: list[int] | None = None,
+                 azimuth0: float = 0.0):
         self.asm = asm
         # a bound of the spectral radius known from a system that differs from this one only
         # in its speed terms (the turbine's re-basing): the Taylor integrator takes it with a
@@ -96,7 +108,7 @@ class PiecewiseLinearSystem:
             shared = None
         self.geometry = None
         self.periodic = None
-        self.GT = np.zeros((1, 0, 0), dtype=complex)  # turning load harmonics (use_loads)
+        self.GT = np.zeros((1, 0, 0), dtype=complex)  # turning load harmonics (_use_loads)
         self.load_columns = None
         K, C, W, off = asm.K, asm.C, asm.contacts.W, asm.contacts.offset
         if geometry is not None:
@@ -146,14 +158,18 @@ class PiecewiseLinearSystem:
         self.P = None
         self.MinvU = self.Minv
         if inputs is not None:
-            self.set_inputs(inputs)
+            self._set_inputs(inputs)
+        if load_columns is not None and self.turning:
+            self._use_loads(load_columns)
+        #: input azimuth at the start of the system's stretch (rad)
+        self.azimuth0 = float(azimuth0)
 
     @property
     def turning(self) -> bool:
         """True when the geometry turns (a time-periodic system, ``periodic`` set)."""
         return self.periodic is not None
 
-    def use_loads(self, columns: list[int], constant: bool = True) -> None:
+    def _use_loads(self, columns: list[int], constant: bool = True) -> None:
         """Forces of a run are given as values of the load map's ``columns`` (a grid (rows,
         m) with m = ``len(columns)`` plus one when ``constant``: then the last column
         multiplies the constant centrifugal force ``f_const``, give it 1); a turning load map
@@ -172,7 +188,7 @@ class PiecewiseLinearSystem:
 
     def generalized_force(self, u: np.ndarray, azimuth: float) -> np.ndarray:
         """The generalised force (n,) of one row ``u`` of the force grid at input ``azimuth``
-        (rad): the load values when :meth:`use_loads` was called (the load map at that
+        (rad): the load values when the system takes load columns (the load map at that
         azimuth), else ``u`` itself."""
         if self.load_columns is None:
             return u
@@ -180,9 +196,6 @@ class PiecewiseLinearSystem:
         B = self.at(azimuth, ("B",))["B"][:, cols]
         F = B @ u[:len(cols)]
         return F + self.f_const * u[-1] if constant else F
-
-    #: input azimuth at the run's start (rad): set by the run (turning geometry, alternation)
-    azimuth0 = 0.0
 
     def at(self, azimuth: float, only: tuple | None = None) -> dict:
         """Frozen matrices at input ``azimuth`` (rad): ``K0``, ``C0``, ``W``, ``offset``, ``B``
@@ -206,15 +219,13 @@ class PiecewiseLinearSystem:
         return {"K0": K0, "C0": C0,
                 "W": v["contacts.W"], "offset": v["contacts.offset"], "B": v["B"]}
 
-    def set_inputs(self, inputs: np.ndarray) -> None:
+    def _set_inputs(self, inputs: np.ndarray) -> None:
         """Set the input basis from spanning columns ``inputs`` (n, k): every generalised force
         given to the exact method must then lie in their span (with the contacts' constant
-        forces); call before the first propagation of this system."""
-        if "_exact_integrators" in self.__dict__:
-            raise ModelError("inputs", "set the input basis before the first propagation")
+        forces)."""
         if self.turning:
             raise ModelError("inputs", "a turning system takes its forces as load values "
-                             "(use_loads), not in an input basis")
+                             "(load_columns), not in an input basis")
         n = self.n
         cols = [np.asarray(inputs, dtype=float).reshape(n, -1)]
         hit = self.offset != 0.0

@@ -2068,22 +2068,25 @@ class TaylorIntegrator:
             # terms (the turbine's re-basing): its bound with a margin, instead of ~1-3 ms of
             # eigenvalues; the series' tail check still halves any piece it makes too long
             self.rho = RHO_SPEED * float(base)
-            system.rho_bound = float(base)  # passed on as is: margins do not compound
+            rho_shared = float(base)  # passed on as is: margins do not compound
             sb = getattr(system, "state_bound_base", None)
         elif system.turning:
             self.rho = max(spectral_bound_turning(system), 1e-300)
-            system.rho_bound = self.rho
+            rho_shared = self.rho
         else:
             parts = spectral_bound_all(system, parts=True)  # shared with the state bound
             self.rho = max(radius_bound(*parts), 1e-300)
-            system.rho_bound = self.rho
+            rho_shared = self.rho
         self.reach = float(reach)
         if base and sb is not None:
             self.state_bound = sb.rescaled(RHO_SPEED)
-            system.state_bound = sb
+            sb_shared = sb
         else:
             self.state_bound = StateBound(system, self.rho, parts)
-            system.state_bound = self.state_bound
+            sb_shared = self.state_bound
+        #: the bounds a system differing from this one only in its speed terms may reuse
+        #: (:func:`gearmodal.integrate.exact.shared_bounds`)
+        self.shared = (rho_shared, sb_shared)
         self.terms = np.array(_term_table(float(reach), int(n_terms or 0)), dtype=np.int64)
         self.n_terms = int(self.terms[-1])  # the full count, last in the table
         self.tscale = TERM_BINS * self.rho / reach
