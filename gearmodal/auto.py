@@ -51,10 +51,7 @@ from __future__ import annotations
 import copy
 import json
 import math
-import os
-import shutil
 import time
-import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -63,6 +60,7 @@ import pandas as pd
 
 from .errors import ModelError, StoreError
 from .saved import load_run
+from .store import Store
 from .summary import summarize
 
 #: the quantities of the paper's double-contact study compared between rungs
@@ -131,38 +129,19 @@ STORE_FORMAT = "gearmodal.auto/2"
 
 
 class _Store:
-    """The rungs of one ladder on disk (layout in the module docstring)."""
+    """The rungs of one ladder on disk (layout in the module docstring), in a
+    :class:`gearmodal.store.Store`."""
 
     def __init__(self, directory, ident: dict):
-        self.dir = Path(directory)
-        self.dir.mkdir(parents=True, exist_ok=True)
-        meta = self.dir / "auto_store.json"
-        ident = {"format": STORE_FORMAT, **ident}
-        if meta.exists():
-            old = json.loads(meta.read_text())
-            if old.get("format") != STORE_FORMAT:
-                raise StoreError("store", f"= {str(directory)!r} was written by an older "
-                                 f"gearmodal (format {old.get('format', 1)!r}, this one reads "
-                                 f"{STORE_FORMAT!r}): use a new store or delete it")
-            for key, val in ident.items():
-                if old.get(key) != val:
-                    raise StoreError("store", f"= {str(directory)!r} holds the ladder of a "
-                                     f"different {key.replace('_', ' ')} ({old.get(key)!r}, "
-                                     f"not {val!r}): use a new store or delete it")
-        else:
-            self._write(meta, ident)
-
-    @staticmethod
-    def _write(path: Path, data: dict) -> None:
-        tmp = path.with_name(f".{path.stem}-{uuid.uuid4().hex[:8]}.json")
-        tmp.write_text(json.dumps(data, indent=1))
-        os.replace(tmp, path)  # whole file or none: a killed run leaves no partial rung
+        self.store = Store(directory, meta="auto_store.json", format=STORE_FORMAT,
+                           identity=ident)
+        self.dir = self.store.dir
+        self.store.write_meta()
 
     def load(self, level: int, settings: dict) -> dict | None:
-        p = self.dir / f"rung{level}.json"
-        if not p.exists():
+        d = self.store.read_json(f"rung{level}.json")
+        if d is None:
             return None
-        d = json.loads(p.read_text())
         if any(not math.isclose(d["settings"].get(k, math.nan), v, rel_tol=1e-12)
                for k, v in settings.items()):
             return None  # a guard (scene and coarsest, in the identity, pin them): rerun
@@ -170,19 +149,14 @@ class _Store:
 
     def save(self, level: int, settings: dict, cpu: float, summary: dict,
              result=None) -> None:
-        """Store a finished rung: its result first (``rung<l>/``, renamed into place), then
-        its summary (``rung<l>.json``, which marks the rung done)."""
+        """Store a finished rung: its result first (``rung<l>/``, whole), then its summary
+        (``rung<l>.json``, which marks the rung done)."""
         if result is not None:
-            tmp = self.dir / f".rung{level}-{uuid.uuid4().hex[:8]}"
-            result.save(tmp)
-            final = self.dir / f"rung{level}"
-            if final.exists():
-                shutil.rmtree(final)
-            os.rename(tmp, final)
+            self.store.put(f"rung{level}", result.save)
         clean = {k: (float(v) if isinstance(v, (int, float, np.floating, np.integer))
                      else None) for k, v in summary.items()}
-        self._write(self.dir / f"rung{level}.json",
-                    {"settings": settings, "cpu_s": cpu, "summary": clean})
+        self.store.write_json(f"rung{level}.json",
+                              {"settings": settings, "cpu_s": cpu, "summary": clean})
 
     def result(self, level: int):
         """The stored result of a rung, or None."""
@@ -191,7 +165,7 @@ class _Store:
 
     def drop(self, level: int) -> None:
         """Forget a rung's result (it can no longer be chosen); its summary stays."""
-        shutil.rmtree(self.dir / f"rung{level}", ignore_errors=True)
+        self.store.drop(f"rung{level}")
 
 
 def _rung_scene(scene, settings: dict):

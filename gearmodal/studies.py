@@ -37,6 +37,7 @@ import pandas as pd
 
 from .errors import ModelError, StoreError
 from .result_io import sha256_of
+from .store import Store
 from .summary import summarize
 
 __all__ = ["load_result", "load_table", "summarize", "sweep"]
@@ -157,24 +158,6 @@ def _worker_start(parent: int) -> None:
         os._exit(1)
 
 
-#: a case's temporary folder older than this (s) was left by a writer that was killed (a
-#: case is written in milliseconds)
-STALE_S = 600.0
-
-
-def _clean_leftovers(root: Path) -> None:
-    """Remove the temporary case folders (``.tmp-<case>-*``) a killed writer left in the
-    store, so that the store holds only whole cases (a folder a running writer still fills is
-    younger than :data:`STALE_S`)."""
-    now = time.time()
-    for d in root.glob(".tmp-*"):
-        try:
-            if now - d.stat().st_mtime > STALE_S:
-                shutil.rmtree(d, ignore_errors=True)
-        except OSError:
-            pass
-
-
 def _terminate_workers(executor) -> None:
     """End a pool's workers now (Ctrl-C: the interpreter's exit would otherwise wait for the
     running cases, 36 s on the fatigue set). Python 3.14's ``terminate_workers``; before it,
@@ -252,16 +235,14 @@ def _read_case_file(path: Path) -> pd.DataFrame:
     return pd.read_parquet(path, page_checksum_verification=True)
 
 
-def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict,
+def _write_case(store: Store, cid: str, case: dict, row: dict, tables: dict,
                 result_dir: Path | None = None) -> None:
-    """Write a case atomically: a temporary directory renamed into place when complete (with
-    the saved result moved in as ``result/``)."""
-    final = root / cid
-    tmp = root / f".tmp-{cid}-{uuid.uuid4().hex[:8]}"
-    tmp.mkdir(parents=True)
-    try:
-        frame = pd.DataFrame([{**row, "case_id": cid,
-                               "parameters_json": _case_json(case)}])
+    """Write a case whole (:meth:`gearmodal.store.Store.put`: with the saved result moved in
+    as ``result/``); a case another run finished first is kept."""
+
+    def fill(tmp: Path) -> None:
+        tmp.mkdir(parents=True)
+        frame = pd.DataFrame([{**row, "case_id": cid, "parameters_json": _case_json(case)}])
         frame.to_parquet(tmp / "row.parquet", write_page_checksum=True)
         for name, df in tables.items():
             df.to_parquet(tmp / f"{name}.parquet", write_page_checksum=True)
@@ -271,15 +252,8 @@ def _write_case(root: Path, cid: str, case: dict, row: dict, tables: dict,
             {f.name: _sha256(f) for f in sorted(tmp.glob("*.parquet"))}, indent=1))
         if result_dir is not None:
             os.rename(result_dir, tmp / "result")
-        try:
-            os.rename(tmp, final)
-        except OSError:
-            if not (final / "row.parquet").exists():
-                raise
-            # another run finished the same case first: keep its copy
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
+
+    store.put(f"cases/{cid}", fill, replace=False)
 
 
 def load_result(store, case_id: str):
@@ -365,40 +339,19 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
     ids = [_case_id(c) for c in cases]
     if len(set(ids)) != len(ids):
         raise ModelError("parameters", "two cases are identical")
-    root = None
+    root = disk = None
     ident = {**_scene_identity(scene), "metrics": _callable_name(metrics)}
     if store is not None:
-        root = Path(store) / "cases"
+        disk = Store(store, meta="sweep.json", format=STORE_FORMAT, identity=ident,
+                     compare=("scene_sha256", "callable", "metrics"),
+                     labels={"scene_sha256": "scene", "callable": "scene"})
+        root = disk.dir / "cases"
         root.mkdir(parents=True, exist_ok=True)
-        _clean_leftovers(root)
-        meta_path = Path(store) / "sweep.json"
-        old = {}
-        if meta_path.exists():
-            try:
-                old = json.loads(meta_path.read_text())
-                if not isinstance(old, dict):
-                    raise ValueError(f"a {type(old).__name__}, not a table")
-            except (OSError, ValueError) as e:  # (damaged: it is written atomically)
-                raise StoreError("store", f"= {str(store)!r}: sweep.json is unreadable "
-                                 f"({str(e)[:120]}), so the scene its cases belong to is "
-                                 "unknown: use a new store or delete it") from None
-            if old.get("format") != STORE_FORMAT:
-                raise StoreError("store", f"= {str(store)!r} was written by an older gearmodal "
-                                 f"(format {old.get('format', 1)!r}, this one reads "
-                                 f"{STORE_FORMAT!r}): use a new store or delete it")
-            old_id = old.get("identity", {})
-            for key in ("scene_sha256", "callable", "metrics"):
-                if key in old_id and old_id[key] != ident.get(key):
-                    what = "metrics" if key == "metrics" else "scene"
-                    raise StoreError("store", f"= {str(store)!r} was made with a different "
-                                     f"{what} ({key} differs): use a new store or delete it")
+        disk.clean("cases")
         # every case this store has seen, earlier runs' first (a run on a subset keeps them)
-        known = {c["case_id"]: c for c in old.get("cases", [])}
+        known = {c["case_id"]: c for c in disk.previous.get("cases", [])}
         known.update({i: {"case_id": i, **c} for i, c in zip(ids, cases, strict=True)})
-        meta = {"format": STORE_FORMAT, "identity": ident, "cases": list(known.values())}
-        tmp = meta_path.with_name(f".sweep-{uuid.uuid4().hex[:8]}.json")
-        tmp.write_text(json.dumps(meta, indent=1, default=repr))
-        os.replace(tmp, meta_path)
+        disk.write_meta(cases=list(known.values()))
     rows: dict[str, dict] = {}
     for cid in ids:
         if root is not None and (root / cid).is_dir() \
@@ -452,7 +405,7 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
                             fid, fc = futures[f]
                             if not (root / fid).exists():
                                 r, t, cpu_f = f.result()
-                                _write_case(root, fid, fc, {**r, "cpu_s": cpu_f}, t,
+                                _write_case(disk, fid, fc, {**r, "cpu_s": cpu_f}, t,
                                             _saved(saves[fid]))
                     raise
                 rows[cid] = {"error": f"{type(err).__name__}: {err}", "cached": False}
@@ -461,7 +414,7 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
             else:
                 row["cpu_s"] = cpu
                 if root is not None:
-                    _write_case(root, cid, c, row, tables, _saved(saves[cid]))
+                    _write_case(disk, cid, c, row, tables, _saved(saves[cid]))
                 rows[cid] = {**row, "case_id": cid, "cached": False}
             bar.update(1)
     except KeyboardInterrupt:
