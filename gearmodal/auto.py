@@ -339,14 +339,12 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
 
 
 def chosen_result(choice: FidelityChoice, field_: str = "tol"):
-    """The chosen rung's result with the choice attached as ``result.auto``; raises
-    :class:`ModelError` naming ``field_`` when no rung met the tolerance."""
+    """The chosen rung's result (:class:`gearmodal.run.ChosenRun` wraps it with the choice);
+    raises :class:`ModelError` naming ``field_`` when no rung met the tolerance."""
     if not choice.met:
         d = choice.table[["rung", "dt", "diff_next", "diff_next2"]].to_string(index=False)
         raise ModelError(field_, f"= {choice.tol:g}: no rung of the step ladder agreed with "
                          f"the next two finer ones within it ({len(choice.table)} rungs run):\n"
                          f"{d}\nthe scene may not be reproducible to this tolerance (a "
                          "chaotic rattle); raise it, or run more levels with gm.auto.choose")
-    res = choice.result
-    res.auto = choice
-    return res
+    return choice.result

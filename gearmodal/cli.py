@@ -146,67 +146,60 @@ def cmd_simulate(args) -> int:
         if not (math.isfinite(args.output_dt) and args.output_dt > 0):
             raise ModelError("--output-dt", f"= {args.output_dt!r}: must be > 0 s")
         scene.dt = args.output_dt
-    run = None
     from tqdm import tqdm
 
-    # the tables stream to OUT while the run goes (constant memory), unless CSV is asked for
-    # or the step ladder runs (its rungs have their own store)
-    stream = args.format == "parquet" and scene.method != "auto"
-    into = args.out if stream else None
-    if scene.method == "auto":  # the step ladder, one bar step per rung (gearmodal.auto)
-        from .auto import choose, chosen_result, fingerprint
+    from .auto import fingerprint
+    from .run import run
 
-        with tqdm(desc=f"auto, tolerance {scene.tolerance:g}: rungs", unit="rung",
-                  disable=args.quiet) as bar:
-            # rungs stored as they finish, by the scene's fingerprint: the same command again
-            # resumes the ladder, another scene (or --t-end) into the same OUT starts its own
-            store = Path(args.out) / "auto_rungs" / fingerprint(scene)[:16]
-            res = chosen_result(choose(scene, scene.tolerance, store=store,
-                                       progress=lambda *_: bar.update(1)), "scene.tolerance")
-    elif scene.turbine is not None:
-        with tqdm(total=int(round(scene.t_end / scene.drivetrain.get("aero_dt", 0.02))),
-                  desc="turbine + gearbox", unit="step", disable=args.quiet) as bar:
-            res = scene.simulate(progress=lambda i, n: bar.update(1), out=into)
-    else:
-        res = scene.simulate(out=into)
+    # the tables stream to OUT while the run goes (constant memory), unless CSV is asked for
+    # or the step ladder runs: its rungs are stored as they finish, by the scene's
+    # fingerprint (the same command again resumes the ladder, another scene or --t-end into
+    # the same OUT starts its own)
+    auto = scene.method == "auto"
+    store = Path(args.out) / "auto_rungs" / fingerprint(scene)[:16] if auto else None
+    into = args.out if args.format == "parquet" and not auto else None
+    bars = []  # made at the first report: a run that reports none shows no bar
+
+    def progress(i, n):
+        if not bars:
+            bars.append(tqdm(total=n, desc="run", unit="step", disable=args.quiet))
+        bars[0].update(i - bars[0].n)
+
+    try:
+        res = run(scene, progress=progress, out=into, store=store)
+    finally:
+        for bar in bars:
+            bar.close()
     fmt = args.format
     if scene.wind is not None:
         scene.wind.release()  # the run is over: its turbulence box is not kept for the figures
-    if scene.turbine is not None:
-        run = res
-        sim = run.gearbox
-        out = run.save(args.out, fmt)
-        fig = run.plot()
-        fig.savefig(out / "drivetrain.png", dpi=130)
-        plt.close(fig)
-        fig = run.turbine.plot()
-        fig.savefig(out / "turbine.png", dpi=130)
-        plt.close(fig)
-    else:
-        sim = res
-        out = sim.save(args.out, fmt)
-    auto = getattr(res, "auto", None)
-    if auto is not None:
-        auto.save(out)
-        fig = auto.plot()
+    sim = res.gearbox
+    out = res.save(args.out, fmt)
+    if res.turbine is not None:
+        for name, fig in (("drivetrain", res.plot()), ("turbine", res.turbine.plot())):
+            fig.savefig(out / f"{name}.png", dpi=130)
+            plt.close(fig)
+    if res.choice is not None:
+        choice = res.choice
+        fig = choice.plot()
         fig.savefig(out / "auto.png", dpi=130)
         plt.close(fig)
-        st = auto.settings
-        loaded = int(auto.table["cached"].sum()) if "cached" in auto.table else 0
-        print(f"auto: rung {auto.rung} of {len(auto.table)}"
+        st = choice.settings
+        loaded = int(choice.table["cached"].sum()) if "cached" in choice.table else 0
+        print(f"auto: rung {choice.rung} of {len(choice.table)}"
               + (f" ({loaded} loaded from the store)" if loaded else "")
               + f", dt {st['dt']:.6g} s"
-              + f" (within {auto.tol:g} of the next two finer rungs); wrote {out}/auto.csv")
+              + f" (within {choice.tol:g} of the next two finer rungs); wrote {out}/auto.csv")
     fig = sim.plot()
     fig.savefig(out / "forces.png", dpi=130)
     plt.close(fig)
     dc = sim.double_contact()
     dc.to_csv(out / "double_contact.csv", index=False)
     _write_load_sharing(sim, out, fmt)
-    if run is not None:
-        st = run.stats
-        cut = run.cut_in_time
-        power = run.turbine.view(["power_W"], max_rows=None)["power_W"]
+    if res.turbine is not None:
+        st = sim.stats  # the run's clock (gearmodal.turbine.drivetrain.Coupling.result)
+        cut = res.turbine.cut_in_time
+        power = res.turbine.view(["power_W"], max_rows=None)["power_W"]
         tail = power[power.index >= power.index[-1] / 2].mean() / 1e3
         print(f"cut-in at {cut:.2f} s" if cut is not None else "no cut-in", end="; ")
         print(f"mean power over the second half {tail:.0f} kW; "

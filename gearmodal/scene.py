@@ -234,35 +234,19 @@ class Scene:
         return doc
 
     def simulate(self, progress=None, out=None):
-        """Run the scene: :func:`gearmodal.simulate` on the model with the scene's loads, or,
-        with a ``[turbine]`` table, :func:`gearmodal.turbine.simulate_drivetrain` (returns a
-        :class:`~gearmodal.turbine.DrivetrainResult`). ``progress(i, n)`` is passed to the
-        turbine run. ``out``: a directory the run's tables stream to as it goes (constant
-        memory; not with ``method = "auto"``, whose rungs have their own store).
+        """Run the scene (:func:`gearmodal.run.run`, the one path every caller takes):
+        :func:`gearmodal.simulate` on the model with the scene's loads, or, with a
+        ``[turbine]`` table, :func:`gearmodal.turbine.simulate_drivetrain` (a
+        :class:`~gearmodal.turbine.DrivetrainResult`), or with ``method = "auto"`` the step
+        ladder of :func:`gearmodal.auto.choose` with the scene's ``tolerance`` (a
+        :class:`~gearmodal.run.ChosenRun`: the chosen rung's result and the choice). Every
+        one follows :class:`~gearmodal.run.RunResult` (``gearbox``, ``turbine``, ``choice``,
+        ``save``, ``plot``). ``progress(i, n)``: after each aerodynamic step of a turbine, each
+        rung of the ladder. ``out``: a directory the run's tables stream to as it goes
+        (constant memory; not with ``method = "auto"``, whose rungs have their own store)."""
+        from .run import run
 
-        ``method = "auto"`` runs the step ladder of :func:`gearmodal.auto.choose` with the
-        scene's ``tolerance`` and returns the chosen rung's result, the choice attached as
-        ``result.auto`` (``progress(i, n)`` after rung ``i`` of at most ``n``)."""
-        if self.method == "auto":
-            from .auto import LEVELS, choose, chosen_result
-
-            if out is not None:
-                raise ModelError("out", "method = 'auto' keeps its rungs in its own store; "
-                                 "save the chosen result instead")
-            step = None if progress is None else (lambda lv, st, row: progress(lv + 1, LEVELS))
-            return chosen_result(choose(self, self.tolerance, progress=step),
-                                 "scene.tolerance")
-        if self.turbine is not None:
-            from .turbine import simulate_drivetrain
-
-            return simulate_drivetrain(self.turbine, self.wind, self.model, self.t_end,
-                                       dt=self.dt, method=self.method, progress=progress,
-                                       out=out, **self.drivetrain, **self.options)
-        from .integrate import simulate
-
-        return simulate(self.model, self.t_end, dt=self.dt, loads=self.loads,
-                        q0=self.initial_q(), v0=self.v0, method=self.method,
-                        speed_rpm=self.speed_rpm, out=out, **self.options)
+        return run(self, progress=progress, out=out)
 
     def loads_at(self, t: float) -> dict:
         """Every load's value at time ``t`` (s), N or N m: a number as it is, a Series on its

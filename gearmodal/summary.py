@@ -71,7 +71,7 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
     ``forces`` (planet flank and bearing forces and the load-sharing factor against time), as
     stored by :func:`sweep`.
     """
-    sim = getattr(result, "gearbox", result)
+    sim = result.gearbox
     f = sim.forces
     # the structure the builders recorded (SimulationResult.elements): the meshes of the
     # planet named within its stage, the stage of the first one
@@ -117,8 +117,8 @@ def summarize(result, *, planet: str = "planet1", tables: bool = False,
         row = kg[(kg.stage == name) & (kg.mesh == role)]
         out[f"k_gamma_{role}"] = float(row.k_gamma.iloc[0]) if len(row) else math.nan
     out["n_events"] = int(len(sim.events))
-    if hasattr(result, "turbine"):
-        cut = result.cut_in_time
+    if result.turbine is not None:
+        cut = result.turbine.cut_in_time
         out["cut_in_time_s"] = float(cut) if cut is not None else math.nan
         ld = result.turbine.loads
         out["mean_power_W"] = float(ld.loc[ld.index >= cut, "power_W"].mean()) \

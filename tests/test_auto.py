@@ -15,6 +15,7 @@ import gearmodal as gm
 from gearmodal.auto import QUANTITIES, difference
 from gearmodal.cli import main
 from gearmodal.errors import ModelError
+from gearmodal.run import RunResult
 from gearmodal.scene import load_scene
 from gearmodal.studies import summarize
 
@@ -61,10 +62,12 @@ def test_scene_method_auto_returns_the_chosen_rung_and_the_cli_writes_the_table(
     assert sc.method == "auto" and sc.tolerance == 0.05
     calls = []
     sim = sc.simulate(progress=lambda i, n: calls.append((i, n)))
-    assert calls[0] == (1, 6) and len(calls) == len(sim.auto.table)
-    assert sim.auto.results == []  # only the chosen rung's run is kept
-    assert sim.auto.met and sim.settings["dt"] == pytest.approx(sim.auto.settings["dt"])
-    assert sim.settings["method"] == "exact"
+    assert calls[0] == (1, 6) and len(calls) == len(sim.choice.table)
+    assert sim.choice.results == []  # only the chosen rung's run is kept
+    assert sim.choice.met
+    assert sim.gearbox.settings["dt"] == pytest.approx(sim.choice.settings["dt"])
+    assert sim.gearbox.settings["method"] == "exact"
+    assert isinstance(sim, RunResult) and isinstance(sim.result, gm.SimulationResult)
     out = tmp_path / "run"
     assert main(["simulate", str(p), "--out", str(out), "--quiet"]) == 0
     for f in ("auto.csv", "auto.json", "auto.png", "events.parquet", "forces.parquet"):

@@ -200,6 +200,23 @@ class SimulationResult:
                 f"{self.stats.get('n_events', '?')} events, "
                 f"method={self.settings.get('method', '?')!r}{where})")
 
+    # the protocol every run result follows (gearmodal.run.RunResult): a gearbox run is its
+    # own gearbox, with no turbine side and no fidelity choice
+    @property
+    def gearbox(self) -> SimulationResult:
+        """This result (:class:`gearmodal.run.RunResult`: a turbine run's is its gearbox's)."""
+        return self
+
+    @property
+    def turbine(self) -> None:
+        """No turbine side (:class:`gearmodal.run.RunResult`)."""
+        return None
+
+    @property
+    def choice(self) -> None:
+        """No fidelity choice (:class:`gearmodal.run.RunResult`)."""
+        return None
+
     def time_span(self) -> tuple[float, float]:
         """The first and last output time (s), without reading a stored run's rows."""
         return self._span()

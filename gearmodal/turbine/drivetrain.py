@@ -110,6 +110,11 @@ class DrivetrainResult:
     def cut_in_time(self) -> float | None:
         return self.turbine.cut_in_time
 
+    @property
+    def choice(self) -> None:
+        """No fidelity choice made this run (:class:`gearmodal.run.RunResult`)."""
+        return None
+
     def to_frame(self) -> pd.DataFrame:
         """The turbine loads at the aerodynamic rate."""
         return self.turbine.loads
