@@ -52,6 +52,9 @@ The turbine in wind, simulated together with the gearbox model of ``scene.model`
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import json
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -60,10 +63,22 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ModelError, unknown
+from .integrate import MAX_STEPS
 from .integrate.loads import Harmonic
+from .io import read_loads, shaft_loads
 from .model import validate as v
+from .model.dump import dumps as dump_model
+from .model.dump import to_toml
 from .model.model import Model
 from .model.schema import REQUIRED, Field, Table
+from .model.toml_io import load, override
+from .run import run
+from .static import balance as _balance
+from .static import equilibrium
+from .turbine import Wind, load_turbine
+
+#: the step limit as the file format page writes it
+_MAX_STEPS = f"{MAX_STEPS:.0e}".replace("e+0", "e")
 
 METHODS = ("exact", "newmark", "scipy", "auto")
 _LOAD_UNIT = "N or N m"
@@ -73,7 +88,8 @@ SCENE = Table("scene", (
     Field("t_end", "number", "s", low=0.0, low_open=True, default=REQUIRED, doc="run length",
           limits="time"),
     Field("dt", "number", "s", low=0.0, low_open=True, default=REQUIRED,
-          doc="propagation and output step, at most t_end and t_end / 5e7", limits="time"),
+          doc=f"propagation and output step, at most t_end and t_end / {_MAX_STEPS}",
+          limits="time"),
     Field("method", "choice", choices=METHODS, default="exact", doc="integrator"),
     Field("speed_rpm", "number", "rpm", low=0.0, limits="speed_rpm",
           doc="input speed (default 0; turbine scenes: the rotor's, not this)"),
@@ -164,7 +180,6 @@ class Scene:
         ``[load_file]`` table, the turbine and load files by absolute path.
 
         Raises :class:`ModelError` naming a load given as a function (not writable)."""
-        from .model.dump import to_toml
 
         return to_toml(self._document(model_path))
 
@@ -173,12 +188,7 @@ class Scene:
         scene (:meth:`dumps`, file paths left out), the turbine's data and the load file's
         bytes. Independent of the library version, of comments and layout in the files and
         of where they are; what resumable stores key their runs by."""
-        import dataclasses
-        import hashlib
-        import json
 
-        from .model.dump import dumps as dump_model
-        from .model.dump import to_toml
 
         parts = [dump_model(self.model), to_toml(self._document("", paths=False))]
         if self.turbine is not None:
@@ -189,7 +199,6 @@ class Scene:
         return hashlib.sha256("\n".join(parts).encode()).hexdigest()
 
     def _document(self, model_path: str, paths: bool = True) -> dict:
-        import dataclasses
 
         sc = {"model": model_path, "t_end": self.t_end, "dt": self.dt, "method": self.method}
         if self.turbine is None:
@@ -244,7 +253,6 @@ class Scene:
         ``save``, ``plot``). ``progress(i, n)``: after each aerodynamic step of a turbine, each
         rung of the ladder. ``out``: a directory the run's tables stream to as it goes
         (constant memory; not with ``method = "auto"``, whose rungs have their own store)."""
-        from .run import run
 
         return run(self, progress=progress, out=out)
 
@@ -270,7 +278,6 @@ class Scene:
         through its lowest modes."""
         if self.start != "equilibrium":
             return self.q0
-        from .static import equilibrium
 
         at0 = self.loads_at(0.0)
         try:
@@ -321,7 +328,6 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
         raise ModelError(str(p), f"TOML syntax error: {e}") from None
     except RecursionError:
         raise ModelError(str(p), "TOML nested too deeply") from None
-    from .model.toml_io import override
 
     overrides = dict(overrides or {})
     model_over = {k[len("model."):]: x for k, x in overrides.items() if k.startswith("model.")}
@@ -346,7 +352,6 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
     if "model" not in raw:
         raise ModelError("scene.model", "missing: required key (the model file)")
     model_file = SCENE.by_key()["model"].read("scene.model", raw["model"])
-    from .model.toml_io import load
 
     try:  # the model first: its errors are the first a new scene meets
         model = load(p.parent / model_file, overrides=model_overrides)
@@ -358,9 +363,9 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
     t_end, dt, method = sc["t_end"], sc["dt"], sc["method"]
     if dt > t_end:
         raise ModelError("scene.dt", f"= {dt!r}: must be at most scene.t_end = {t_end!r} s")
-    if t_end / dt > 5e7:
+    if t_end / dt > MAX_STEPS:
         raise ModelError("scene.dt", f"= {dt!r}: scene.t_end / dt = {t_end / dt:.3g} steps; at "
-                         "most 5e7")
+                         f"most {_MAX_STEPS}")
     tolerance = 0.05
     if "tolerance" in sc:
         if method != "auto":
@@ -389,7 +394,6 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
         if name not in asm.load_names:
             raise ModelError(f"loads.{name}", unknown("load", name, asm.load_names))
     if balance:
-        from .static import balance as _balance
 
         loads[balance] = _balance(asm, means, on=balance)[balance]
     q0 = {k: v.number(f"q0.{k}", x, "m or rad") for k, x in doc.get("q0", {}).items()}
@@ -427,7 +431,6 @@ def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
 
 def _load_file(spec: dict, p: Path) -> dict:
     """``[load_file]``: loads as Series from an aeroelastic output file."""
-    from .io import read_loads, shaft_loads
 
     lf = LOAD_FILE.read("load_file", spec)
     if not lf["mapping"]:
@@ -441,7 +444,6 @@ def _load_file(spec: dict, p: Path) -> dict:
 
 def _turbine(spec: dict, wspec: dict, p: Path, t_end: float):
     """``[turbine]`` and ``[wind]``: the turbine, its wind and the drivetrain run options."""
-    from .turbine import Wind, load_turbine
 
     tb = TURBINE.read("turbine", spec)
     turbine = load_turbine(p.parent / tb.pop("file"))
