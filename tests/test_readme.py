@@ -1,6 +1,8 @@
 """The Python examples of the README and of the guide (docs/**/*.md) run as written (from the
 repository root)."""
 
+import importlib.util
+import os
 import re
 from pathlib import Path
 
@@ -23,6 +25,10 @@ def test_the_pages_have_examples():
 @pytest.mark.parametrize("page, i, code", BLOCKS,
                          ids=[f"{p.relative_to(ROOT)}:{i}" for p, i, _ in BLOCKS])
 def test_python_block_runs(page, i, code, tmp_path, monkeypatch):
+    if "gearmodal.turbine.rosco" in code and importlib.util.find_spec("rosco") is None \
+            and not os.environ.get("GEARMODAL_CI"):
+        pytest.skip("the nrel5mw extra's controller: pip install --no-deps "
+                    "'rosco>=2.10,<2.11' (CI installs it)")
     monkeypatch.chdir(tmp_path)
     # paths in the pages are relative to the repository root
     code = code.replace('"studies/', f'"{ROOT}/studies/')

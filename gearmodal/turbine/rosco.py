@@ -1,0 +1,172 @@
+"""NREL's ROSCO controller in the loop: the compiled ``libdiscon.so`` the ``rosco`` wheel ships,
+called through the Bladed-style ``DISCON`` interface every aeroelastic code uses.
+
+The ``rosco`` wheel (2.10) holds the controller compiled for Linux (``rosco/lib/libdiscon.so``
+and its Fortran runtime in ``rosco.libs/``) and, under ``Examples/Test_Cases/NREL-5MW/``, the
+NREL 5 MW turbine's OpenFAST deck with the ``DISCON.IN`` tuned for it. Its Python side imports
+WISDEM, which a user of gearmodal does not need: install it with ``pip install --no-deps
+"rosco>=2.10,<2.11"`` (the README's ``nrel5mw`` extra); gearmodal only loads the library.
+
+**The interface** (the Bladed "swap array", ``avrSWAP``: 32-bit floats, record ``k`` at index
+``k - 1``): the simulation writes the status (record 1: 0 first call, 1 running, -1 last),
+time (2), communication interval (3), blade pitch angles (4, 33, 34; rad), the measured
+generator speed (20; rad/s), rotor speed (21), generator torque (23; N m), hub-height wind
+speed (27; m/s) and the number of blades (61); the controller writes the demanded generator
+torque (47; N m) and blade pitch angles (42-44; rad) back. The character arguments are the
+parameter file's path (``DISCON.IN``) and the name its debug output files take.
+
+**Two instances in one process.** ``libdiscon.so`` keeps its state in Fortran module
+variables: two controllers loaded from the same file would share them (the dynamic loader
+returns the same handle). Each :class:`Rosco` therefore loads its own copy of the library from
+a private temporary folder (beside a link to the wheel's ``rosco.libs``, where the library's
+run path looks for its Fortran runtime), so each has its own state; its debug files go to that
+folder too, which :meth:`Rosco.close` removes. What the controller prints (its banner, warnings
+and status lines) goes to that folder's ``rosco.log``, not to the terminal.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib.util
+import math
+import os
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ModelError, SolveError
+
+#: the swap array's length (ROSCO reads records up to 165 and writes some beyond)
+SWAP_SIZE = 500
+#: the deck of the NREL 5 MW turbine inside the rosco wheel
+NREL5MW_DECK = Path("Examples") / "Test_Cases" / "NREL-5MW"
+
+
+def rosco_files() -> tuple[Path, Path]:
+    """``(libdiscon.so, the NREL 5 MW deck folder)`` of the installed ``rosco`` wheel; a
+    :class:`~gearmodal.ModelError` saying how to install it when it is missing."""
+    spec = importlib.util.find_spec("rosco")
+    if spec is None or spec.origin is None:
+        raise ModelError("rosco", "is not installed: pip install --no-deps "
+                         "\"rosco>=2.10,<2.11\" (gearmodal loads its compiled controller only; "
+                         "the README's nrel5mw extra)")
+    pkg = Path(spec.origin).parent
+    lib = pkg / "lib" / "libdiscon.so"
+    deck = pkg.parent / NREL5MW_DECK
+    if not lib.exists():
+        raise ModelError("rosco", f"has no compiled controller at {lib} (a wheel for this "
+                         "platform ships it: Linux x86_64)")
+    return lib, deck
+
+
+class Rosco:
+    """One ROSCO controller (module docstring).
+
+    Parameters
+    ----------
+    discon_in : its parameter file; default: the ``DISCON.IN`` of the NREL 5 MW turbine the
+        wheel ships.
+    dt : the controller's sample time, s (its calls should come every ``dt``).
+    blades : number of blades.
+    pitch0 : the blades' pitch at the start, rad.
+    """
+
+    def __init__(self, discon_in=None, *, dt: float, blades: int = 3, pitch0: float = 0.0):
+        lib, deck = rosco_files()
+        self.discon_in = Path(discon_in) if discon_in is not None else deck / "DISCON.IN"
+        if not self.discon_in.is_file():
+            raise ModelError("discon_in", f"= {str(self.discon_in)!r}: no such file")
+        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+            raise ModelError("dt", f"= {dt!r}: must be a finite number > 0 s")
+        self.dt = float(dt)
+        self._dir = Path(tempfile.mkdtemp(prefix="gearmodal-rosco-"))
+        (self._dir / "rosco.libs").symlink_to(lib.parent.parent.parent / "rosco.libs")
+        copy = self._dir / "lib" / "discon" / "libdiscon.so"
+        copy.parent.mkdir(parents=True)
+        shutil.copy2(lib, copy)
+        self._lib = ctypes.CDLL(str(copy))
+        # the controller writes its banner and status to standard output (Fortran unit 6),
+        # buffered by the Fortran runtime: flushed after each call, while standard output is
+        # its log (the runtime may be scipy's copy of the same library, loaded and set up
+        # before this: its buffering cannot be switched off here)
+        runtime = sorted(p.name for p in (self._dir / "rosco.libs").glob("libgfortran*"))
+        self._flush = ctypes.CDLL(runtime[0])._gfortran_flush_i4 if runtime else None
+        self.log = self._dir / "rosco.log"  # what the controller printed
+        self._lib.DISCON.argtypes = [ctypes.POINTER(ctypes.c_float),
+                                     ctypes.POINTER(ctypes.c_int32), ctypes.c_char_p,
+                                     ctypes.c_char_p, ctypes.c_char_p]
+        self._lib.DISCON.restype = None
+        self._infile = str(self.discon_in.resolve()).encode()
+        self._outname = str(self._dir / "rosco").encode()
+        self._msg = ctypes.create_string_buffer(1000)
+        self._fail = ctypes.c_int32(0)
+        self.swap = np.zeros(SWAP_SIZE, dtype=np.float32)
+        s = self.swap
+        s[2] = self.dt
+        s[60] = blades
+        s[3] = s[32] = s[33] = pitch0
+        s[48], s[49] = 1000, len(self._infile)
+        s[50], s[51] = len(self._outname), 1000
+        self.started = False
+        self.torque, self.pitch = 0.0, float(pitch0)
+
+    def step(self, t: float, generator_speed: float, rotor_speed: float, pitch: float,
+             generator_torque: float, wind_speed: float) -> tuple[float, float]:
+        """One controller call at time ``t`` (s) with the measured ``generator_speed`` and
+        ``rotor_speed`` (rad/s), the blades' ``pitch`` (rad), the ``generator_torque`` (N m)
+        and the hub-height ``wind_speed`` (m/s): returns the demanded generator torque (N m)
+        and collective blade pitch (rad)."""
+        if self._lib is None:
+            raise ModelError("rosco", "the controller was closed")
+        s = self.swap
+        s[0] = 1.0 if self.started else 0.0
+        s[1] = t
+        s[3] = s[32] = s[33] = pitch
+        s[19], s[20] = generator_speed, rotor_speed
+        s[22] = generator_torque
+        s[26] = wind_speed
+        s[14] = generator_torque * generator_speed  # measured shaft power, W
+        self._call()
+        self.started = True
+        self.torque, self.pitch = float(s[46]), float(s[41])
+        return self.torque, self.pitch
+
+    def _call(self) -> None:
+        """Call DISCON with the process's standard output sent to :attr:`log` (a solver
+        never prints)."""
+        sys.stdout.flush()
+        saved = os.dup(1)
+        try:
+            with open(self.log, "ab") as log:
+                os.dup2(log.fileno(), 1)
+                self._lib.DISCON(self.swap.ctypes.data_as(ctypes.POINTER(ctypes.c_float)),
+                                 ctypes.byref(self._fail), self._infile, self._outname,
+                                 self._msg)
+                if self._flush is not None:
+                    self._flush(ctypes.byref(ctypes.c_int32(6)))
+        finally:
+            os.dup2(saved, 1)
+            os.close(saved)
+        if self._fail.value < 0:
+            msg = self._msg.value.decode(errors="replace").strip()
+            raise SolveError("rosco", f"DISCON failed at t = {float(self.swap[1]):.4g} s: {msg}")
+
+    def close(self) -> None:
+        """End the controller (its last call) and remove its private folder."""
+        if self._lib is not None and self.started:
+            self.swap[0] = -1.0
+            try:
+                self._call()
+            except SolveError:
+                pass
+        self._lib = None
+        shutil.rmtree(self._dir, ignore_errors=True)
+
+    def __enter__(self) -> Rosco:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
