@@ -37,6 +37,8 @@ from ..errors import ModelError
 from .airfoil import Airfoil
 
 LOAD_COLUMNS = ["thrust_N", "torque_Nm", "shear_y_N", "shear_z_N", "tilt_Nm", "yaw_Nm"]
+#: the high-induction corrections (:class:`Rotor`)
+CORRECTIONS = ("spera", "buhl")
 
 
 @dataclass
@@ -44,8 +46,13 @@ class Rotor:
     """A rigid three-bladed (or ``blades``-bladed) rotor.
 
     radius, hub_radius : m. r, chord : m at the element centres. twist : rad (local pitch of
-    the chord to the rotor plane). pitch : rad (fixed: stall regulation). airfoil : polar.
-    mass : kg (its weight acts on the hub). rho : air density, kg/m^3.
+    the chord to the rotor plane). pitch : rad (fixed: stall regulation; a pitch-regulated
+    turbine gives it per call of :meth:`loads`). airfoil : polar of every element, or
+    ``airfoils`` with ``airfoil_id`` (per element, an index into ``airfoils``): a blade of
+    several sections. mass : kg (its weight acts on the hub). rho : air density, kg/m^3.
+    correction : the high-induction correction, ``"spera"`` (Glauert's in Spera's form above
+    a = 0.2, Hansen eq. 6.38: the 600 kW turbine's) or ``"buhl"`` (Buhl's above a = 0.4, as
+    AeroDyn and CCBlade: a rotor read from an OpenFAST deck).
     """
 
     radius: float
@@ -58,6 +65,9 @@ class Rotor:
     airfoil: Airfoil = field(default_factory=Airfoil.viterna)
     mass: float = 0.0
     rho: float = 1.225
+    airfoils: list | None = None
+    airfoil_id: np.ndarray | None = None
+    correction: str = "spera"
     gravity: float = 9.81
     tol: float = 1e-8
     max_iter: int = 200
@@ -67,6 +77,9 @@ class Rotor:
         self.chord = np.asarray(self.chord, dtype=float)
         self.twist = np.asarray(self.twist, dtype=float)
         n = len(self.r)
+        if self.correction not in CORRECTIONS:
+            raise ModelError("rotor.correction", f"= {self.correction!r}: one of "
+                             + ", ".join(map(repr, CORRECTIONS)))
         if n < 2 or self.chord.shape != (n,) or self.twist.shape != (n,):
             raise ModelError("rotor.r", "r, chord and twist need the same length >= 2")
         if not (0 <= self.hub_radius < self.r.min() and self.r.max() < self.radius):
@@ -74,6 +87,21 @@ class Rotor:
                              f"{self.radius}) m")
         if np.any(np.diff(self.r) <= 0) or np.any(self.chord <= 0):
             raise ModelError("rotor.r", "radii must increase and chords be > 0")
+        # the polars on one grid of angles, a row each, and each element's row: the union of
+        # the polars' own angles, so that interpolating on it is each polar's own (exact)
+        foils = list(self.airfoils) if self.airfoils else [self.airfoil]
+        ids = (np.zeros(n, dtype=np.int64) if self.airfoil_id is None
+               else np.asarray(self.airfoil_id, dtype=np.int64))
+        if ids.shape != (n,) or ids.min() < 0 or ids.max() >= len(foils):
+            raise ModelError("rotor.airfoil_id", f"needs one index per element into the "
+                             f"{len(foils)} airfoils")
+        if len(foils) == 1:
+            grid = foils[0].alpha
+        else:
+            grid = np.unique(np.concatenate([f.alpha for f in foils]))
+        self._polars = (np.ascontiguousarray(grid, dtype=float),
+                        np.array([np.interp(grid, f.alpha, f.cl) for f in foils]),
+                        np.array([np.interp(grid, f.alpha, f.cd) for f in foils]), ids)
         edges = np.concatenate([[self.hub_radius], 0.5 * (self.r[1:] + self.r[:-1]),
                                 [self.radius]])
         self.dr = np.diff(edges)
@@ -95,18 +123,21 @@ class Rotor:
         return y, z, psib
 
     def loads(self, omega: float, psi: float, wind_u: np.ndarray, wind_vt: np.ndarray,
-              reset: bool = False) -> dict:
+              reset: bool = False, pitch: float | None = None) -> dict:
         """Hub loads (``LOAD_COLUMNS``, SI) at rotor speed ``omega`` (rad/s) and azimuth
         ``psi`` (rad) for the wind normal to the rotor ``wind_u`` and in plane along the
-        blade motion ``wind_vt`` (m/s, each (blades, n))."""
+        blade motion ``wind_vt`` (m/s, each (blades, n)); ``pitch``: the blades' pitch (rad;
+        default the rotor's)."""
         a = np.zeros_like(wind_u) if reset else self._a
         ap = np.zeros_like(wind_u) if reset else self._ap
+        pa, pcl, pcd, pid = self._polars
         fn, ft, a, ap = _bem(np.ascontiguousarray(wind_u, dtype=float),
                              np.ascontiguousarray(wind_vt, dtype=float), float(omega), self.r,
-                             self.chord, self.twist + self.pitch, self.dr, self.blades,
-                             self.radius, self.hub_radius, self.airfoil.alpha,
-                             self.airfoil.cl, self.airfoil.cd, a.copy(), ap.copy(), self.rho,
-                             self.tol, self.max_iter)
+                             self.chord,
+                             self.twist + (self.pitch if pitch is None else float(pitch)),
+                             self.dr, self.blades, self.radius, self.hub_radius, pa, pcl, pcd,
+                             pid, a.copy(), ap.copy(), self.rho, self.tol, self.max_iter,
+                             CORRECTIONS.index(self.correction))
         self._a, self._ap = a, ap
         r = self.r[None, :]
         y, z, psib = self.positions(psi)
@@ -121,10 +152,12 @@ class Rotor:
             "yaw_Nm": float((-y * fn).sum()),
         }
 
-    def power_coefficient(self, wind_speed: float, omega: float) -> tuple[float, float]:
-        """``(Cp, Ct)`` in uniform wind (no shear, turbulence or tower)."""
+    def power_coefficient(self, wind_speed: float, omega: float,
+                          pitch: float | None = None) -> tuple[float, float]:
+        """``(Cp, Ct)`` in uniform wind (no shear, turbulence or tower), at ``pitch`` (rad;
+        default the rotor's)."""
         u = np.full((self.blades, len(self.r)), float(wind_speed))
-        ld = self.loads(omega, 0.0, u, np.zeros_like(u), reset=True)
+        ld = self.loads(omega, 0.0, u, np.zeros_like(u), reset=True, pitch=pitch)
         area = math.pi * self.radius**2
         p_wind = 0.5 * self.rho * area * wind_speed**3
         return (ld["torque_Nm"] * omega / p_wind,
@@ -152,9 +185,10 @@ def _polar(al, pa, pcl, pcd):
 
 
 @numba.njit(cache=True)
-def _inductions(phi, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
+def _inductions(phi, theta, sigma, B, R, ri, rh, pa, pcl, pcd, corr=0):
     """The inductions ``(a, a')`` that flow angle ``phi`` implies at an element (module
-    docstring: Prandtl's losses, Glauert's correction, the same limits as the iteration)."""
+    docstring: Prandtl's losses, the high-induction correction ``corr``: 0 Glauert's in
+    Spera's form, 1 Buhl's; the same limits as the iteration)."""
     ac = 0.2
     al = (phi - theta + math.pi) % (2.0 * math.pi) - math.pi
     cl, cd = _polar(al, pa, pcl, pcd)
@@ -169,7 +203,15 @@ def _inductions(phi, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
     scn = sigma * cn
     K = 4.0 * F * sp * sp / (scn if abs(scn) > 1e-12 else 1e-12)
     an = 1.0 / (K + 1.0)
-    if an > ac:  # Glauert correction, Spera's form (Hansen eq. 6.38)
+    if corr == 1:
+        if an > 0.4:  # Buhl's correction (NREL/TP-500-36834, 2005; as AeroDyn and CCBlade)
+            k = 1.0 / K
+            g1 = 2.0 * F * k - (10.0 / 9.0 - F)
+            g2 = max(2.0 * F * k - F * (4.0 / 3.0 - F), 0.0)
+            g3 = 2.0 * F * k - (25.0 / 9.0 - 2.0 * F)
+            an = ((g1 - math.sqrt(g2)) / g3 if abs(g3) > 1e-6
+                  else 1.0 - 0.5 / max(math.sqrt(g2), 1e-12))
+    elif an > ac:  # Glauert correction, Spera's form (Hansen eq. 6.38)
         d = (K * (1.0 - 2.0 * ac) + 2.0) ** 2 + 4.0 * (K * ac * ac - 1.0)
         an = 0.5 * (2.0 + K * (1.0 - 2.0 * ac) - math.sqrt(max(d, 0.0)))
     sct = sigma * ct
@@ -183,24 +225,24 @@ def _inductions(phi, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
 
 
 @numba.njit(cache=True)
-def _residual(phi, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
+def _residual(phi, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd, corr=0):
     """``sin(phi) U_t - cos(phi) U_x`` with the inductions ``phi`` implies: zero exactly at
     the BEM solution (``tan(phi) = U_x / U_t``; Ning 2014's one-equation form)."""
-    a, ap = _inductions(phi, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+    a, ap = _inductions(phi, theta, sigma, B, R, ri, rh, pa, pcl, pcd, corr)
     return math.sin(phi) * (wr * (1.0 + ap) - vt) - math.cos(phi) * u * (1.0 - a)
 
 
 @numba.njit(cache=True)
-def _solve_phi(phi0, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
+def _solve_phi(phi0, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd, corr=0):
     """The flow angle near ``phi0`` where :func:`_residual` vanishes: secant steps, kept
     inside a bracket once the residual has changed sign (Illinois rule); NaN when no root
     is found within 60 evaluations (the caller then iterates the inductions instead)."""
     x0 = phi0
-    f0 = _residual(x0, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+    f0 = _residual(x0, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd, corr)
     if f0 == 0.0:
         return x0
     x1 = x0 + (1e-3 if f0 < 0.0 else -1e-3) * (1.0 if math.cos(x0) > 0.0 else -1.0)
-    f1 = _residual(x1, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+    f1 = _residual(x1, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd, corr)
     lo = hi = np.nan
     flo = fhi = 0.0
     for _ in range(60):
@@ -211,7 +253,7 @@ def _solve_phi(phi0, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
         if math.isfinite(lo):
             # regula falsi on the bracket (Illinois: halve the stale end's value)
             x2 = hi - fhi * (hi - lo) / (fhi - flo)
-            f2 = _residual(x2, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+            f2 = _residual(x2, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd, corr)
             if abs(x2 - hi) <= 1e-13 * (1.0 + abs(x2)) or f2 == 0.0:
                 return x2
             if f2 * fhi < 0.0:
@@ -229,39 +271,41 @@ def _solve_phi(phi0, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd):
             x2 = x1 + math.copysign(0.2, x2 - x1)
         x0, f0 = x1, f1
         x1 = x2
-        f1 = _residual(x1, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd)
+        f1 = _residual(x1, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd, corr)
         if abs(x1 - x0) <= 1e-13 * (1.0 + abs(x1)):
             return x1
     return np.nan
 
 
 @numba.njit(cache=True)
-def _bem(U, vt, omega, r, chord, theta, dr, B, R, rh, pa, pcl, pcd, a, ap, rho, tol,
-         max_iter):
+def _bem(U, vt, omega, r, chord, theta, dr, B, R, rh, pa, PCL, PCD, pid, a, ap, rho, tol,
+         max_iter, corr=0):
     """Element-by-element BEM solution (module docstring); returns per element the normal and
     tangential forces (N, over the element's width) and the inductions. Each element's flow
     angle is the root of the one-equation residual (:func:`_solve_phi`) next to the previous
-    update's; where none is found, the inductions are iterated (relaxed) as before."""
+    update's; where none is found, the inductions are iterated (relaxed) as before. The polars
+    are rows of ``PCL``, ``PCD`` on the angles ``pa``, element ``i``'s the row ``pid[i]``."""
     nb, n = U.shape
     fn = np.empty((nb, n))
     ft = np.empty((nb, n))
     for b in range(nb):
         for i in range(n):
             ri = r[i]
+            pcl, pcd = PCL[pid[i]], PCD[pid[i]]
             sigma = B * chord[i] / (2.0 * math.pi * ri)
             u = max(U[b, i], 1e-3)
             ai, api = a[b, i], ap[b, i]
             phi0 = math.atan2(u * (1.0 - ai), omega * ri * (1.0 + api) - vt[b, i])
             phi = _solve_phi(phi0, u, omega * ri, vt[b, i], theta[i], sigma, B, R, ri, rh,
-                             pa, pcl, pcd)
+                             pa, pcl, pcd, corr)
             if math.isfinite(phi):
-                ai, api = _inductions(phi, theta[i], sigma, B, R, ri, rh, pa, pcl, pcd)
+                ai, api = _inductions(phi, theta[i], sigma, B, R, ri, rh, pa, pcl, pcd, corr)
             else:
                 for _ in range(max_iter):
                     ux = u * (1.0 - ai)
                     ut = omega * ri * (1.0 + api) - vt[b, i]
                     an, apn = _inductions(math.atan2(ux, ut), theta[i], sigma, B, R, ri, rh,
-                                          pa, pcl, pcd)
+                                          pa, pcl, pcd, corr)
                     change = max(abs(an - ai), abs(apn - api))
                     ai += 0.5 * (an - ai)
                     api += 0.5 * (apn - api)

@@ -1,0 +1,144 @@
+"""The NREL 5 MW reference turbine read from its OpenFAST deck (issue 36).
+
+J. Jonkman, S. Butterfield, W. Musial and G. Scott, "Definition of a 5-MW Reference Wind
+Turbine for Offshore System Development", NREL/TP-500-38060, 2009. The deck is the one the
+``rosco`` wheel ships with the controller tuned for it (``Examples/Test_Cases/NREL-5MW/``:
+``NREL-5MW.fst``, ElastoDyn, AeroDyn 15 with its blade file and the eight airfoil polars,
+``DISCON.IN`` and the rotor's ``Cp_Ct_Cq.NREL5MW.txt``); ``openfast-io`` (the ``nrel5mw``
+extra) reads it. Nothing is copied by hand: every number below comes from those files.
+
+:func:`rotor` builds gearmodal's blade-element momentum rotor (:class:`~.rotor.Rotor`, the one
+the 600 kW turbine runs) on the 5 MW blade: AeroDyn's blade nodes between the root and the tip
+node are the element centres (the 17 stations of the definition report's Table 2-1; the root
+and tip nodes bound the elements), each with its chord, twist and polar. Precone and shaft tilt
+are left out (the rotor plane is normal to the wind); :func:`cp_table` reads NREL's table to
+compare with (``docs/guide/turbine.md`` gives the difference).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ModelError
+from .airfoil import Airfoil
+from .rosco import rosco_files
+from .rotor import Rotor
+
+
+@dataclass(frozen=True)
+class Deck:
+    """The parts of the 5 MW deck gearmodal uses (SI units, angles in rad).
+
+    Attributes
+    ----------
+    tip_radius, hub_radius : m. blades : count. precone, shaft_tilt : rad (not modelled by
+    the rotor: its plane is normal to the wind). hub_inertia, generator_inertia : kg m^2
+    (the generator's about its own, high-speed shaft). gear_ratio : generator per rotor speed.
+    drivetrain_stiffness, drivetrain_damping : N m/rad, N m s/rad (the low-speed shaft's
+    equivalent). rated_rotor_speed : rad/s (ElastoDyn's initial speed). generator_efficiency :
+    0..1. air_density : kg/m^3. hub_height : m. span, chord, twist, airfoil_id : AeroDyn's
+    blade nodes (m from the root, m, rad, index into ``airfoils``). airfoils : the polars.
+    path : the deck's folder.
+    """
+
+    tip_radius: float
+    hub_radius: float
+    blades: int
+    precone: float
+    shaft_tilt: float
+    hub_inertia: float
+    generator_inertia: float
+    gear_ratio: float
+    drivetrain_stiffness: float
+    drivetrain_damping: float
+    rated_rotor_speed: float
+    generator_efficiency: float
+    air_density: float
+    hub_height: float
+    span: np.ndarray
+    chord: np.ndarray
+    twist: np.ndarray
+    airfoil_id: np.ndarray
+    airfoils: tuple
+    path: Path
+
+
+def read_deck(path=None) -> Deck:
+    """The 5 MW deck at ``path`` (a folder holding ``NREL-5MW.fst``; default: the one the
+    ``rosco`` wheel ships), read by ``openfast-io``."""
+    if path is None:
+        path = rosco_files()[1]
+    path = Path(path)
+    if not (path / "NREL-5MW.fst").is_file():
+        raise ModelError("deck", f"= {str(path)!r}: no NREL-5MW.fst there")
+    try:
+        from openfast_io.FAST_reader import InputReader_OpenFAST
+    except ImportError:
+        raise ModelError("deck", "reading an OpenFAST deck needs openfast-io: pip install "
+                         "-e '.[nrel5mw]'") from None
+    reader = InputReader_OpenFAST()
+    reader.FAST_InputFile = "NREL-5MW.fst"
+    reader.FAST_directory = str(path)
+    reader.execute()
+    vt = reader.fst_vt
+    ed, ad, sd = vt["ElastoDyn"], vt["AeroDyn"], vt["ServoDyn"]
+    blade = vt["AeroDynBlade"]
+    blade = blade[0] if isinstance(blade, list) else blade
+    foils = []
+    for i, data in enumerate(ad["af_data"]):
+        tab = data[0] if isinstance(data, list) else data
+        alpha = np.radians(np.asarray(tab["Alpha"], dtype=float))
+        foils.append(Airfoil(alpha, np.asarray(tab["Cl"], dtype=float),
+                             np.asarray(tab["Cd"], dtype=float),
+                             name=Path(ad["AFNames"][i]).stem))
+    return Deck(tip_radius=float(ed["TipRad"]), hub_radius=float(ed["HubRad"]),
+                blades=int(ed["NumBl"]), precone=math.radians(float(ed["PreCone(1)"])),
+                shaft_tilt=math.radians(float(ed["ShftTilt"])),
+                hub_inertia=float(ed["HubIner"]), generator_inertia=float(ed["GenIner"]),
+                gear_ratio=float(ed["GBRatio"]),
+                drivetrain_stiffness=float(ed["DTTorSpr"]),
+                drivetrain_damping=float(ed["DTTorDmp"]),
+                rated_rotor_speed=float(ed["RotSpeed"]) * math.pi / 30,
+                generator_efficiency=float(sd["GenEff"]) / 100.0,
+                air_density=float(ad["AirDens"]),
+                hub_height=float(vt["InflowWind"]["RefHt"]),
+                span=np.asarray(blade["BlSpn"], dtype=float),
+                chord=np.asarray(blade["BlChord"], dtype=float),
+                twist=np.radians(np.asarray(blade["BlTwist"], dtype=float)),
+                airfoil_id=np.asarray(blade["BlAFID"], dtype=np.int64) - 1,
+                airfoils=tuple(foils), path=path)
+
+
+def rotor(deck: Deck | None = None) -> Rotor:
+    """The 5 MW rotor for gearmodal's BEM (module docstring): the blade nodes between the
+    root and the tip node as element centres."""
+    d = read_deck() if deck is None else deck
+    inner = slice(1, len(d.span) - 1)
+    return Rotor(radius=d.tip_radius, hub_radius=d.hub_radius,
+                 r=d.hub_radius + d.span[inner], chord=d.chord[inner], twist=d.twist[inner],
+                 blades=d.blades, airfoils=list(d.airfoils), airfoil_id=d.airfoil_id[inner],
+                 airfoil=d.airfoils[0], rho=d.air_density, correction="buhl")
+
+
+def cp_table(path=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """NREL's rotor performance table ``(pitch [rad], tip-speed ratio, Cp[tsr, pitch])`` from
+    ``Cp_Ct_Cq.NREL5MW.txt`` (default: the rosco wheel's)."""
+    path = Path(path) if path is not None else rosco_files()[1] / "Cp_Ct_Cq.NREL5MW.txt"
+    lines = [ln.strip() for ln in path.read_text().splitlines()]
+
+    def after(title: str, rows: int = 1) -> np.ndarray:
+        i = next(k for k, ln in enumerate(lines) if ln.startswith("#") and title in ln)
+        vals = [ln for ln in lines[i + 1:] if ln and not ln.startswith("#")][:rows]
+        return np.array([[float(x) for x in ln.split()] for ln in vals])
+
+    pitch = np.radians(after("Pitch angle vector")[0])
+    tsr = after("TSR vector")[0]
+    cp = after("Power coefficient", len(tsr))
+    if cp.shape != (len(tsr), len(pitch)):
+        raise ModelError("cp_table", f"{path.name}: Cp is {cp.shape}, not "
+                         f"({len(tsr)}, {len(pitch)})")
+    return pitch, tsr, cp
