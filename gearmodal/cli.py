@@ -231,7 +231,7 @@ def _write_load_sharing(sim, out: Path, fmt: str) -> None:
 
 
 STUDIES = ("double-contact", "gravity-torque", "mounting-azimuth", "clearance-map",
-           "load-sharing", "fatigue")
+           "load-sharing", "fatigue", "power-curve")
 
 
 def _study_module(name: str, folder: str | None):
@@ -269,6 +269,11 @@ def cmd_study(args) -> int:
              "max_workers": "--workers", "gravity": "--no-gravity",
              "top_frequency_hz": "--top-frequency", "quick": "--quick"}
     kwargs = {"progress": not args.quiet}
+    if args.turbine is not None:
+        if "turbine" not in params:
+            raise ModelError("turbine", f"= {args.turbine!r}: the {args.study} study takes no "
+                             "turbine name")
+        kwargs["turbine"] = args.turbine
     for key, value in given.items():
         if value is None:
             continue
@@ -381,6 +386,8 @@ def build_parser() -> argparse.ArgumentParser:
     st = sub.add_parser("study", help="run one of the paper's studies (studies/*.py): "
                         + ", ".join(STUDIES))
     st.add_argument("study", choices=STUDIES)
+    st.add_argument("turbine", nargs="?", help="the turbine a study runs on (power-curve: "
+                    "nrel5mw)")
     st.add_argument("--out", required=True, type=_out_folder,
                     help="output folder (its store/ makes a rerun resume)")
     st.add_argument("--duration", type=float, help="simulated time per case, s (turbine "

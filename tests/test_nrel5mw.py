@@ -115,3 +115,41 @@ def test_cp_against_nrels_table(deck):
     assert ours[i, j] == pytest.approx(0.4914, abs=1e-4) and cp[i, j] == 0.465861
     d = (ours - cp)[cp > 0.2]
     assert 0.0 < d.min() and d.max() < 0.045
+
+
+def test_rosco_runs_the_5mw_turbine_to_its_rated_and_optimal_points(deck):
+    """ROSCO in the loop through the stepping API (steady uniform wind, 60 s, means over the
+    last 10 s): above rated (16 m/s) it holds the rated rotor speed, 12.1 rpm, and 5 MW
+    electrical (its region-3 torque times the generator speed and efficiency); below (7 m/s)
+    it tracks the optimal tip-speed ratio 7.5 of its tuning (7.64 here: its wind speed
+    estimator works with NREL's Cp table, the rotor has gearmodal's, 5 % higher), at fine
+    pitch, the rotor at its optimal Cp (0.4918 of gearmodal's BEM)."""
+    above = nrel5mw.controlled_run(16.0, 60.0, deck=deck)
+    assert above["rotor_speed_rpm"] == pytest.approx(12.1, rel=1e-3)
+    assert above["power_kW"] == pytest.approx(5000.0, rel=1e-3)
+    assert 10.0 < above["pitch_deg"] < 15.0
+    below = nrel5mw.controlled_run(7.0, 60.0, deck=deck)
+    assert below["tsr"] == pytest.approx(7.5, rel=0.05) and below["pitch_deg"] == 0.0
+    assert below["cp"] == pytest.approx(0.4918, abs=5e-4)
+
+
+def test_power_curve_study_through_the_cli(tmp_path, capsys):
+    """``gearmodal study power-curve nrel5mw``: every whole m/s from 3 to 25, the columns the
+    issue names, 5 MW above rated; a study that takes no turbine refuses one by name."""
+    import pandas as pd
+
+    from gearmodal.cli import main
+
+    out = tmp_path / "pc"
+    assert main(["study", "power-curve", "nrel5mw", "--out", str(out), "--quiet",
+                 "--duration", "30", "--workers", "2"]) == 0
+    d = pd.read_csv(out / "power_curve.csv")
+    assert list(d.columns) == ["wind_speed_mps", "rotor_speed_rpm", "pitch_deg", "power_kW",
+                               "tsr", "cp"]
+    assert d.wind_speed_mps.tolist() == list(range(3, 26))
+    high = d[d.wind_speed_mps >= 13]
+    assert np.allclose(high.power_kW, 5000.0, rtol=0.01)
+    assert np.allclose(high.rotor_speed_rpm, 12.1, rtol=0.01)
+    assert (out / "power_curve.png").exists() and (out / "report.html").exists()
+    assert main(["study", "gravity-torque", "nrel5mw", "--out", str(tmp_path / "g")]) == 2
+    assert "turbine = 'nrel5mw'" in capsys.readouterr().err

@@ -37,7 +37,9 @@ class Deck:
     ----------
     tip_radius, hub_radius : m. blades : count. precone, shaft_tilt : rad (not modelled by
     the rotor: its plane is normal to the wind). hub_inertia, generator_inertia : kg m^2
-    (the generator's about its own, high-speed shaft). gear_ratio : generator per rotor speed.
+    (the generator's about its own, high-speed shaft). rotor_inertia : kg m^2, the hub's and
+    the blades' (ElastoDyn's blade mass density integrated over the span about the shaft).
+    gear_ratio : generator per rotor speed.
     drivetrain_stiffness, drivetrain_damping : N m/rad, N m s/rad (the low-speed shaft's
     equivalent). rated_rotor_speed : rad/s (ElastoDyn's initial speed). generator_efficiency :
     0..1. air_density : kg/m^3. hub_height : m. span, chord, twist, airfoil_id : AeroDyn's
@@ -52,6 +54,7 @@ class Deck:
     shaft_tilt: float
     hub_inertia: float
     generator_inertia: float
+    rotor_inertia: float
     gear_ratio: float
     drivetrain_stiffness: float
     drivetrain_damping: float
@@ -86,6 +89,12 @@ def read_deck(path=None) -> Deck:
     reader.execute()
     vt = reader.fst_vt
     ed, ad, sd = vt["ElastoDyn"], vt["AeroDyn"], vt["ServoDyn"]
+    edb = vt["ElastoDynBlade"]
+    edb = edb[0] if isinstance(edb, list) else edb
+    length = float(ed["TipRad"]) - float(ed["HubRad"])
+    s_b = np.asarray(edb["BlFract"], dtype=float) * length
+    mass = np.asarray(edb["BMassDen"], dtype=float) * float(edb["AdjBlMs"])
+    j_blade = float(np.trapezoid(mass * (float(ed["HubRad"]) + s_b) ** 2, s_b))
     blade = vt["AeroDynBlade"]
     blade = blade[0] if isinstance(blade, list) else blade
     foils = []
@@ -99,6 +108,7 @@ def read_deck(path=None) -> Deck:
                 blades=int(ed["NumBl"]), precone=math.radians(float(ed["PreCone(1)"])),
                 shaft_tilt=math.radians(float(ed["ShftTilt"])),
                 hub_inertia=float(ed["HubIner"]), generator_inertia=float(ed["GenIner"]),
+                rotor_inertia=float(ed["HubIner"]) + int(ed["NumBl"]) * j_blade,
                 gear_ratio=float(ed["GBRatio"]),
                 drivetrain_stiffness=float(ed["DTTorSpr"]),
                 drivetrain_damping=float(ed["DTTorDmp"]),
@@ -142,3 +152,97 @@ def cp_table(path=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         raise ModelError("cp_table", f"{path.name}: Cp is {cp.shape}, not "
                          f"({len(tsr)}, {len(pitch)})")
     return pitch, tsr, cp
+
+def drivetrain(deck: Deck | None = None):
+    """The 5 MW drivetrain as a gearmodal model on the low-speed side: the rotor (hub and
+    blades) and the generator (its inertia times the gear ratio squared) joined by ElastoDyn's
+    drivetrain spring and damper; the generator's speed and torque on the high-speed shaft are
+    the gear ratio times and over its own."""
+    from ..model.bearing import Bearing
+    from ..model.components import RigidBody
+    from ..model.model import Model
+
+    d = read_deck() if deck is None else deck
+    m = Model("nrel5mw_drivetrain", input="rotor")
+    m.add(RigidBody(name="rotor", mass=1.0, inertia=d.rotor_inertia, dofs="torsional",
+                    speed_ratio=1.0))
+    m.add(RigidBody(name="generator", mass=1.0, inertia=d.generator_inertia * d.gear_ratio**2,
+                    dofs="torsional", speed_ratio=1.0))
+    m.add(Bearing(name="drivetrain", a="rotor", b="generator",
+                  stiffness={"theta": d.drivetrain_stiffness},
+                  damping={"theta": d.drivetrain_damping}))
+    return m
+
+
+def blade_pitch_for_torque(rot, wind_speed: float, omega: float, torque: float) -> float:
+    """The collective pitch (rad, 0 to 45 deg) at which the rotor's aerodynamic torque in
+    uniform ``wind_speed`` at ``omega`` is ``torque`` (bisection; 0 when even fine pitch
+    gives less): a start near the controller's steady state."""
+    u = np.full((rot.blades, len(rot.r)), float(wind_speed))
+
+    def q(p):
+        return rot.loads(omega, 0.0, u, np.zeros_like(u), reset=True, pitch=p)["torque_Nm"]
+
+    lo, hi = 0.0, math.radians(45.0)
+    if q(lo) <= torque:
+        return 0.0
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if q(mid) > torque else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None = None,
+                   dt: float = 0.00625, aero_dt: float = 0.0125, average: float = 10.0) -> dict:
+    """The 5 MW turbine in steady uniform wind ``wind_speed`` (m/s) for ``t_end`` s, ROSCO
+    (:class:`~.rosco.Rosco`, the shipped DISCON.IN) setting the generator torque and the
+    collective pitch every ``dt`` (its sample time), the drivetrain a :class:`gearmodal.Stepper`
+    advanced with the aerodynamic torque of the BEM rotor (evaluated every ``aero_dt``, held).
+    Starts at the optimal tip-speed ratio's speed (at most rated) and the pitch that balances
+    rated torque above rated. Returns the means over the last ``average`` s: rotor speed
+    (rpm), pitch (deg), electrical power (kW: generator torque times speed times the
+    generator efficiency), tip-speed ratio, Cp (aerodynamic power over the wind's)."""
+    from ..integrate.stepper import Stepper
+    from .rosco import Rosco
+
+    d = read_deck() if deck is None else deck
+    rot = rotor(d)
+    n, m_aero = round(t_end / dt), max(1, round(aero_dt / dt))
+    if not (wind_speed > 0 and n > 0 and average < t_end):
+        raise ModelError("wind_speed", f"= {wind_speed!r} m/s, t_end = {t_end!r} s: a wind "
+                         "speed > 0 and a run longer than the averaging window")
+    w_rated = d.rated_rotor_speed
+    om0 = min(7.5 * wind_speed / d.tip_radius, w_rated)
+    k_opt = 0.5 * d.air_density * math.pi * d.tip_radius**5 * 0.4914 / 7.5**3
+    t_gen = k_opt * om0**2 / d.gear_ratio  # generator torque, high-speed shaft
+    pitch = 0.0
+    if om0 >= w_rated:
+        t_gen = 43093.55  # rated torque of the DISCON.IN (its VS_RtTq): a start only
+        pitch = blade_pitch_for_torque(rot, wind_speed, om0, t_gen * d.gear_ratio)
+    u = np.full((rot.blades, len(rot.r)), float(wind_speed))
+    q = rot.loads(om0, 0.0, u, np.zeros_like(u), reset=True, pitch=pitch)["torque_Nm"]
+    st = Stepper(drivetrain(d), dt=dt, speed_rpm=om0 * 30 / math.pi,
+                 loads={"rotor.torque": q, "generator.torque": -t_gen * d.gear_ratio},
+                 q0="equilibrium", reference="follow", rebase_dt=dt, record=False,
+                 outputs=["rotor.theta.velocity", "generator.theta.velocity"])
+    rows = []
+    with Rosco(dt=dt, pitch0=pitch) as ctrl:
+        y = st.values()
+        for k in range(n):
+            t = k * dt
+            w_r, w_g = y["rotor.theta.velocity"], y["generator.theta.velocity"]
+            if k % m_aero == 0:
+                q = rot.loads(w_r, 0.0, u, np.zeros_like(u), pitch=pitch)["torque_Nm"]
+            t_gen, pitch = ctrl.step(t, d.gear_ratio * w_g, w_r, pitch, t_gen, wind_speed)
+            y = st.advance((k + 1) * dt, {"rotor.torque": q,
+                                          "generator.torque": -t_gen * d.gear_ratio},
+                           hold="hold")
+            if t >= t_end - average:
+                rows.append((w_r, pitch, t_gen * d.gear_ratio * w_g, q * w_r))
+    w_r, p, p_gen, p_aero = np.mean(rows, axis=0)
+    return {"wind_speed_mps": float(wind_speed), "rotor_speed_rpm": w_r * 30 / math.pi,
+            "pitch_deg": math.degrees(p),
+            "power_kW": p_gen * d.generator_efficiency / 1e3,
+            "tsr": w_r * d.tip_radius / wind_speed,
+            "cp": p_aero / (0.5 * d.air_density * math.pi * d.tip_radius**2 * wind_speed**3)}
+
