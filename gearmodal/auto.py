@@ -125,7 +125,7 @@ def fingerprint(scene) -> str:
 
 
 #: the layout of a store; a store of another layout (an older gearmodal) is refused
-STORE_FORMAT = "gearmodal.auto/2"
+STORE_FORMAT = "gearmodal.auto/3"  # /2: the identity at the meta file's top level (read)
 
 
 class _Store:
@@ -134,8 +134,9 @@ class _Store:
 
     def __init__(self, directory, ident: dict):
         self.store = Store(directory, meta="auto_store.json", format=STORE_FORMAT,
-                           identity=ident)
+                           identity=ident, older=("gearmodal.auto/2",))
         self.dir = self.store.dir
+        self.store.clean()
         self.store.write_meta()
 
     def load(self, level: int, settings: dict) -> dict | None:

@@ -197,7 +197,7 @@ def cmd_simulate(args) -> int:
     dc.to_csv(out / "double_contact.csv", index=False)
     _write_load_sharing(sim, out, fmt)
     if res.turbine is not None:
-        st = sim.stats  # the run's clock (gearmodal.turbine.drivetrain.Coupling.result)
+        st = sim.stats  # the turbine run's clock, in its gearbox result's stats
         cut = res.turbine.cut_in_time
         power = res.turbine.view(["power_W"], max_rows=None)["power_W"]
         tail = power[power.index >= power.index[-1] / 2].mean() / 1e3

@@ -72,6 +72,17 @@ class ChosenRun:
         """The chosen rung's figure."""
         return self.result.plot()
 
+    @property
+    def auto(self) -> FidelityChoice:
+        """The choice (``choice``; the name the result carried before)."""
+        return self.choice
+
+    def __getattr__(self, name: str):
+        # the chosen rung's result as it was returned before (``forces``, ``stats``, ...)
+        if name.startswith("__") or name in ("result", "choice"):
+            raise AttributeError(name)
+        return getattr(self.result, name)
+
 
 def run(scene, progress: Callable[[int, int], None] | None = None, out=None,
         store=None) -> RunResult:
@@ -80,7 +91,7 @@ def run(scene, progress: Callable[[int, int], None] | None = None, out=None,
     ``progress(i, n)``: called as the run goes (the turbine: after each aerodynamic step; the
     step ladder: after each rung, of at most ``n``); a gearbox alone runs in one call.
     ``out``: a directory the run's tables stream to (constant memory; not with ``method =
-    "auto``, whose rungs have their own ``store``). ``store``: where the step ladder keeps its
+    "auto"``, whose rungs have their own ``store``). ``store``: where the step ladder keeps its
     rungs to resume (``method = "auto"`` only).
     """
     if scene.method == "auto":

@@ -49,17 +49,21 @@ class Store:
         that differs.
     compare : the identity entries compared (default: all); an entry the stored identity
         lacks is not compared (a store from before it was recorded).
+    older : earlier layouts' tags this one still reads (the meta file is rewritten with
+        ``format`` by :meth:`write_meta`).
     labels : how to name an entry in the refusal (default: its key, underscores as spaces).
 
     ``previous`` is the meta file found (``{}`` for a new store).
     """
 
     def __init__(self, directory, *, meta: str, format: str, identity: dict,
-                 compare: tuple[str, ...] | None = None, labels: dict | None = None):
+                 compare: tuple[str, ...] | None = None, labels: dict | None = None,
+                 older: tuple[str, ...] = ()):
         self.dir = Path(directory)
         self.dir.mkdir(parents=True, exist_ok=True)
         self.meta_path = self.dir / meta
         self.format = format
+        self.older = tuple(older)
         self.identity = dict(identity)
         self.previous = self._read_meta()
         if self.previous:
@@ -86,7 +90,7 @@ class Store:
             raise StoreError("store", f"= {str(self.dir)!r}: {self.meta_path.name} is "
                              f"unreadable ({str(e)[:120]}), so what its entries belong to is "
                              "unknown: use a new store or delete it") from None
-        if old.get("format") != self.format:
+        if old.get("format") != self.format and old.get("format") not in self.older:
             raise StoreError("store", f"= {str(self.dir)!r} was written by an older gearmodal "
                              f"(format {old.get('format', 1)!r}, this one reads "
                              f"{self.format!r}): use a new store or delete it")
@@ -107,31 +111,40 @@ class Store:
 
     def put(self, name: str, fill: Callable[[Path], None], *, replace: bool = True) -> None:
         """Write the folder entry ``name`` whole: ``fill(tmp)`` writes it into a temporary
-        folder, renamed into place when complete. An entry already there is replaced, or
-        (``replace=False``: another run finished the same entry first) kept."""
+        folder, renamed into place when complete. An entry already there is replaced (moved
+        aside under a temporary name first, so that a reader finds the old entry or the new
+        one, never a half-deleted one), or (``replace=False``: another run finished the same
+        entry first) kept. Two writers of one entry at once: one's entry stays whole."""
         final = self.dir / name
         final.parent.mkdir(parents=True, exist_ok=True)
-        tmp = final.with_name(f".tmp-{final.name}-{uuid.uuid4().hex[:8]}")
+        tag = uuid.uuid4().hex[:8]
+        tmp = final.with_name(f".tmp-{final.name}-{tag}")
+        old = final.with_name(f".tmp-{final.name}-old-{tag}")
         try:
             fill(tmp)
-            if replace and final.exists():
-                shutil.rmtree(final)
+            if replace:
+                try:
+                    os.rename(final, old)
+                except FileNotFoundError:
+                    pass
             try:
                 os.rename(tmp, final)
             except OSError:
-                if replace or not final.exists():
+                if not final.exists():
                     raise
+                # another writer put the same entry there first: keep its whole copy
         finally:
-            if tmp.exists():
-                shutil.rmtree(tmp, ignore_errors=True)
+            for leftover in (tmp, old):
+                if leftover.exists():
+                    shutil.rmtree(leftover, ignore_errors=True)
 
     def drop(self, name: str) -> None:
         """Remove the entry ``name`` (a folder or a file), if there."""
         path = self.dir / name
         if path.is_dir():
             shutil.rmtree(path, ignore_errors=True)
-        elif path.exists():
-            path.unlink()
+        else:
+            path.unlink(missing_ok=True)
 
     def clean(self, sub: str = "") -> None:
         """Remove the temporary entries a killed writer left (in ``sub``), so that the store

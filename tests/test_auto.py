@@ -68,6 +68,8 @@ def test_scene_method_auto_returns_the_chosen_rung_and_the_cli_writes_the_table(
     assert sim.gearbox.settings["dt"] == pytest.approx(sim.choice.settings["dt"])
     assert sim.gearbox.settings["method"] == "exact"
     assert isinstance(sim, RunResult) and isinstance(sim.result, gm.SimulationResult)
+    # as it was returned before: the chosen rung's result's own names, the choice as .auto
+    assert sim.auto is sim.choice and sim.forces is sim.result.forces
     out = tmp_path / "run"
     assert main(["simulate", str(p), "--out", str(out), "--quiet"]) == 0
     for f in ("auto.csv", "auto.json", "auto.png", "events.parquet", "forces.parquet"):

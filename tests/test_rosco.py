@@ -97,3 +97,31 @@ def test_bad_input_is_refused_by_name(tmp_path):
     with pytest.raises(gm.ModelError, match="closed"):
         ctrl.step(0.0, 100.0, 1.0, 0.0, 0.0, 8.0)
     assert np.isfinite(ctrl.torque)
+
+
+def test_controllers_in_threads_take_turns_and_print_nothing(capfd):
+    """Standard output is the process's: controllers in two threads (a Dask worker's) take
+    turns redirecting it, so each run is its run alone and nothing reaches the terminal."""
+    import threading
+
+    def above(c, k):
+        return c.step(k * DT, 125.0, 125.0 / 97, 0.15, 43000.0, 16.0)
+
+    with Rosco(dt=DT) as alone:
+        solo = [above(alone, k) for k in range(1700)]
+    capfd.readouterr()
+    results = {}
+
+    def work(i):
+        with Rosco(dt=DT) as c:
+            results[i] = [above(c, k) for k in range(1700)]
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    print("after")  # standard output is back where it was
+    out, _ = capfd.readouterr()
+    assert results[0] == solo and results[1] == solo
+    assert out == "after\n"

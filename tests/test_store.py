@@ -51,6 +51,12 @@ def test_other_layouts_and_damaged_meta_are_refused(tmp_path):
     _store(tmp_path, scene="a")
     with pytest.raises(gm.StoreError, match="different scene"):
         _store(tmp_path, scene="b")
+    # an earlier tag named as read: read, and rewritten with this one's
+    (tmp_path / "meta.json").write_text(json.dumps({"format": "test/0", "scene": "a"}))
+    s = Store(tmp_path, meta="meta.json", format="test/1", identity={"scene": "a"},
+              older=("test/0",))
+    s.write_meta()
+    assert json.loads((tmp_path / "meta.json").read_text())["format"] == "test/1"
 
 
 def test_entries_are_written_whole(tmp_path):
@@ -76,6 +82,7 @@ def test_entries_are_written_whole(tmp_path):
     assert (tmp_path / "cases" / "c1" / "x.txt").read_text() == "first"
     s.put("cases/c1", fill("third"))
     assert (tmp_path / "cases" / "c1" / "x.txt").read_text() == "third"
+    assert sorted(p.name for p in (tmp_path / "cases").iterdir()) == ["c1"]  # nothing aside
     s.write_json("rung0.json", {"a": 1})
     assert s.read_json("rung0.json") == {"a": 1} and s.read_json("rung1.json") is None
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cases", "rung0.json"]

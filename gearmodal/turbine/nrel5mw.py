@@ -94,7 +94,8 @@ def read_deck(path=None) -> Deck:
     length = float(ed["TipRad"]) - float(ed["HubRad"])
     s_b = np.asarray(edb["BlFract"], dtype=float) * length
     mass = np.asarray(edb["BMassDen"], dtype=float) * float(edb["AdjBlMs"])
-    j_blade = float(np.trapezoid(mass * (float(ed["HubRad"]) + s_b) ** 2, s_b))
+    trapezoid = getattr(np, "trapezoid", None) or np.trapz  # numpy < 2: trapz
+    j_blade = float(trapezoid(mass * (float(ed["HubRad"]) + s_b) ** 2, s_b))
     blade = vt["AeroDynBlade"]
     blade = blade[0] if isinstance(blade, list) else blade
     foils = []
@@ -141,7 +142,9 @@ def cp_table(path=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     lines = [ln.strip() for ln in path.read_text().splitlines()]
 
     def after(title: str, rows: int = 1) -> np.ndarray:
-        i = next(k for k, ln in enumerate(lines) if ln.startswith("#") and title in ln)
+        i = next((k for k, ln in enumerate(lines) if ln.startswith("#") and title in ln), None)
+        if i is None:
+            raise ModelError("cp_table", f"{path.name} has no '{title}' section")
         vals = [ln for ln in lines[i + 1:] if ln and not ln.startswith("#")][:rows]
         return np.array([[float(x) for x in ln.split()] for ln in vals])
 
@@ -226,7 +229,7 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
                  q0="equilibrium", reference="follow", rebase_dt=dt, record=False,
                  outputs=["rotor.theta.velocity", "generator.theta.velocity"])
     rows = []
-    with Rosco(dt=dt, pitch0=pitch) as ctrl:
+    with Rosco(dt=dt, pitch0=pitch, efficiency=d.generator_efficiency) as ctrl:
         y = st.values()
         for k in range(n):
             t = k * dt

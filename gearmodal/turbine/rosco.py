@@ -33,6 +33,7 @@ import os
 import shutil
 import sys
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +44,8 @@ from ..errors import ModelError, SolveError
 SWAP_SIZE = 500
 #: the deck of the NREL 5 MW turbine inside the rosco wheel
 NREL5MW_DECK = Path("Examples") / "Test_Cases" / "NREL-5MW"
+#: standard output is the process's: one controller call redirects it at a time
+_STDOUT = threading.Lock()
 
 
 def rosco_files() -> tuple[Path, Path]:
@@ -72,9 +75,12 @@ class Rosco:
     dt : the controller's sample time, s (its calls should come every ``dt``).
     blades : number of blades.
     pitch0 : the blades' pitch at the start, rad.
+    efficiency : the generator's, 0..1: the electrical power the controller is told (record
+        15) is the shaft power times it.
     """
 
-    def __init__(self, discon_in=None, *, dt: float, blades: int = 3, pitch0: float = 0.0):
+    def __init__(self, discon_in=None, *, dt: float, blades: int = 3, pitch0: float = 0.0,
+                 efficiency: float = 1.0):
         lib, deck = rosco_files()
         self.discon_in = Path(discon_in) if discon_in is not None else deck / "DISCON.IN"
         if not self.discon_in.is_file():
@@ -82,12 +88,20 @@ class Rosco:
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
             raise ModelError("dt", f"= {dt!r}: must be a finite number > 0 s")
         self.dt = float(dt)
+        self.efficiency = float(efficiency)
+        self._lib = None
         self._dir = Path(tempfile.mkdtemp(prefix="gearmodal-rosco-"))
-        (self._dir / "rosco.libs").symlink_to(lib.parent.parent.parent / "rosco.libs")
-        copy = self._dir / "lib" / "discon" / "libdiscon.so"
-        copy.parent.mkdir(parents=True)
-        shutil.copy2(lib, copy)
-        self._lib = ctypes.CDLL(str(copy))
+        try:
+            (self._dir / "rosco.libs").symlink_to(lib.parent.parent.parent / "rosco.libs")
+            copy = self._dir / "lib" / "discon" / "libdiscon.so"
+            copy.parent.mkdir(parents=True)
+            shutil.copy2(lib, copy)
+            self._lib = ctypes.CDLL(str(copy))
+        except OSError as e:
+            shutil.rmtree(self._dir, ignore_errors=True)
+            raise ModelError("rosco", f"its library could not be loaded from a private copy "
+                             f"in {self._dir.parent} ({e}); a temporary folder that allows "
+                             "executables is needed (TMPDIR)") from None
         # the controller writes its banner and status to standard output (Fortran unit 6),
         # buffered by the Fortran runtime: flushed after each call, while standard output is
         # its log (the runtime may be scipy's copy of the same library, loaded and set up
@@ -128,7 +142,7 @@ class Rosco:
         s[19], s[20] = generator_speed, rotor_speed
         s[22] = generator_torque
         s[26] = wind_speed
-        s[14] = generator_torque * generator_speed  # measured shaft power, W
+        s[14] = generator_torque * generator_speed * self.efficiency  # electrical power, W
         self._call()
         self.started = True
         self.torque, self.pitch = float(s[46]), float(s[41])
@@ -136,20 +150,29 @@ class Rosco:
 
     def _call(self) -> None:
         """Call DISCON with the process's standard output sent to :attr:`log` (a solver
-        never prints)."""
-        sys.stdout.flush()
-        saved = os.dup(1)
-        try:
-            with open(self.log, "ab") as log:
-                os.dup2(log.fileno(), 1)
-                self._lib.DISCON(self.swap.ctypes.data_as(ctypes.POINTER(ctypes.c_float)),
-                                 ctypes.byref(self._fail), self._infile, self._outname,
-                                 self._msg)
-                if self._flush is not None:
-                    self._flush(ctypes.byref(ctypes.c_int32(6)))
-        finally:
-            os.dup2(saved, 1)
-            os.close(saved)
+        never prints). Standard output is the process's: the redirection holds a lock, so
+        controllers in several threads take turns (and nothing else printed during a call
+        reaches the terminal); with no standard output to redirect, the call is made as
+        is."""
+        args = (self.swap.ctypes.data_as(ctypes.POINTER(ctypes.c_float)),
+                ctypes.byref(self._fail), self._infile, self._outname, self._msg)
+        with _STDOUT:
+            if sys.stdout is not None:
+                sys.stdout.flush()
+            try:
+                saved = os.dup(1)
+            except OSError:  # no standard output: nothing to keep from the terminal
+                self._lib.DISCON(*args)
+                return
+            try:
+                with open(self.log, "ab") as log:
+                    os.dup2(log.fileno(), 1)
+                    self._lib.DISCON(*args)
+                    if self._flush is not None:
+                        self._flush(ctypes.byref(ctypes.c_int32(6)))
+            finally:
+                os.dup2(saved, 1)
+                os.close(saved)
         if self._fail.value < 0:
             msg = self._msg.value.decode(errors="replace").strip()
             raise SolveError("rosco", f"DISCON failed at t = {float(self.swap[1]):.4g} s: {msg}")

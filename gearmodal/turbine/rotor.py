@@ -10,7 +10,10 @@ to the rotor and ``v_t`` in the plane along the blade's direction of motion:
 
 with solidity ``sigma = B c / (2 pi r)`` and Prandtl's tip and hub loss ``F``; above ``a_c = 0.2``
 the axial induction follows Glauert's correction in Spera's form (M. O. L. Hansen, "Aerodynamics
-of Wind Turbines", 2nd ed., Earthscan 2008, ch. 6, eqs. 6.35-6.38 and 6.40). Quasi-steady: the
+of Wind Turbines", 2nd ed., Earthscan 2008, ch. 6, eqs. 6.35-6.38 and 6.40), or, with
+``Rotor(correction="buhl")``, Buhl's above a = 0.4 (M. L. Buhl, "A New Empirical Relationship
+between Thrust Coefficient and Induction Factor for the Turbulent Windmill State",
+NREL/TP-500-36834, 2005; as AeroDyn and CCBlade). Quasi-steady: the
 inductions are solved to convergence at every aerodynamic update: each element's flow angle
 is the root of the one-equation residual ``sin(phi) U_t - cos(phi) U_x`` (S. A. Ning, "A simple
 solution method for the blade element momentum equations with guaranteed convergence", Wind
