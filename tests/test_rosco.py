@@ -14,18 +14,9 @@ if not os.environ.get("GEARMODAL_CI") and importlib.util.find_spec("rosco") is N
     pytest.skip("the nrel5mw extra's controller: pip install --no-deps 'rosco>=2.10,<2.11' "
                 "(CI installs it)", allow_module_level=True)
 
-from gearmodal.turbine.rosco import Rosco, rosco_files  # noqa: E402
+from gearmodal.turbine.rosco import Rosco, discon_value  # noqa: E402
 
 DT = 0.00625  # s, the sample time the 5 MW DISCON.IN is tuned for
-
-
-def _discon_value(name: str) -> float:
-    _, deck = rosco_files()
-    for line in (deck / "DISCON.IN").read_text().splitlines():
-        parts = line.split("!")
-        if len(parts) > 1 and parts[1].strip().startswith(name):
-            return float(parts[0].split()[0])
-    raise KeyError(name)
 
 
 def _drive(ctrl, n, gen_speed, pitch, torque, wind):
@@ -41,7 +32,7 @@ def test_below_rated_the_torque_is_near_its_optimal_mode_law():
     ``K w^2`` (``VS_Rgn2K``). At a generator speed held well below rated (70 rad/s of 122.9)
     the demand after 25 s is within 1 % of it (measured 0.44 %: the loop still integrates the
     estimator's offset against the held speed); the pitch stays at fine pitch (0)."""
-    k = _discon_value("VS_Rgn2K")
+    k = discon_value("VS_Rgn2K")
     with Rosco(dt=DT) as ctrl:
         torque, pitch = _drive(ctrl, 4000, 70.0, 0.0, 1.0e4, 7.0)
     assert torque == pytest.approx(k * 70.0**2, rel=0.01)
@@ -52,8 +43,8 @@ def test_above_rated_the_pitch_loop_pitches_to_feather():
     """Region 3: a generator held 2 % above the pitch loop's reference speed makes the
     controller pitch towards feather (its PI loop integrates the speed error), and the torque
     stays near the rated torque ``VS_RtTq`` (within 3 %: ROSCO's region-3 torque law)."""
-    ref = _discon_value("PC_RefSpd")
-    rated = _discon_value("VS_RtTq")
+    ref = discon_value("PC_RefSpd")
+    rated = discon_value("VS_RtTq")
     with Rosco(dt=DT) as ctrl:
         early = _drive(ctrl, 400, 1.02 * ref, 0.15, rated, 16.0)
         late = _drive(ctrl, 3600, 1.02 * ref, 0.15, rated, 16.0)

@@ -206,7 +206,7 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
     (rpm), pitch (deg), electrical power (kW: generator torque times speed times the
     generator efficiency), tip-speed ratio, Cp (aerodynamic power over the wind's)."""
     from ..integrate.stepper import Stepper
-    from .rosco import Rosco
+    from .rosco import Rosco, discon_value
 
     d = read_deck() if deck is None else deck
     rot = rotor(d)
@@ -214,13 +214,14 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
     if not (wind_speed > 0 and n > 0 and average < t_end):
         raise ModelError("wind_speed", f"= {wind_speed!r} m/s, t_end = {t_end!r} s: a wind "
                          "speed > 0 and a run longer than the averaging window")
+    # the start: the controller's own steady state (its DISCON.IN's optimal tip-speed ratio
+    # and region-2 gain below rated, its rated torque and the balancing pitch above)
     w_rated = d.rated_rotor_speed
-    om0 = min(7.5 * wind_speed / d.tip_radius, w_rated)
-    k_opt = 0.5 * d.air_density * math.pi * d.tip_radius**5 * 0.4914 / 7.5**3
-    t_gen = k_opt * om0**2 / d.gear_ratio  # generator torque, high-speed shaft
+    om0 = min(discon_value("VS_TSRopt") * wind_speed / d.tip_radius, w_rated)
+    t_gen = discon_value("VS_Rgn2K") * (d.gear_ratio * om0) ** 2  # high-speed shaft, N m
     pitch = 0.0
     if om0 >= w_rated:
-        t_gen = 43093.55  # rated torque of the DISCON.IN (its VS_RtTq): a start only
+        t_gen = discon_value("VS_RtTq")
         pitch = blade_pitch_for_torque(rot, wind_speed, om0, t_gen * d.gear_ratio)
     u = np.full((rot.blades, len(rot.r)), float(wind_speed))
     q = rot.loads(om0, 0.0, u, np.zeros_like(u), reset=True, pitch=pitch)["torque_Nm"]

@@ -65,6 +65,17 @@ def rosco_files() -> tuple[Path, Path]:
     return lib, deck
 
 
+def discon_value(name: str, discon_in=None) -> float:
+    """The number a ``DISCON.IN`` gives for ``name`` (``"VS_RtTq"``; default file: the 5 MW
+    one of the wheel): the first value on the line whose comment starts with it."""
+    path = Path(discon_in) if discon_in is not None else rosco_files()[1] / "DISCON.IN"
+    for line in path.read_text().splitlines():
+        value, _, comment = line.partition("!")
+        if comment.strip().split(" ")[0].split("\t")[0] == name and value.split():
+            return float(value.split()[0])
+    raise ModelError("discon_in", f"{path.name} gives no {name}")
+
+
 class Rosco:
     """One ROSCO controller (module docstring).
 
