@@ -198,7 +198,7 @@ def blade_pitch_for_torque(rot, wind_speed: float, omega: float, torque: float) 
 def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None = None,
                    dt: float = 0.00625, aero_dt: float = 0.0125, average: float = 10.0) -> dict:
     """The 5 MW turbine in steady uniform wind ``wind_speed`` (m/s) for ``t_end`` s, ROSCO
-    (:class:`~.rosco.Rosco`, the shipped DISCON.IN) setting the generator torque and the
+    (:class:`~.rosco.Rosco`, the deck's DISCON.IN) setting the generator torque and the
     collective pitch every ``dt`` (its sample time), the drivetrain a :class:`gearmodal.Stepper`
     advanced with the aerodynamic torque of the BEM rotor (evaluated every ``aero_dt``, held).
     Starts at the optimal tip-speed ratio's speed (at most rated) and the pitch that balances
@@ -216,12 +216,13 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
                          "speed > 0 and a run longer than the averaging window")
     # the start: the controller's own steady state (its DISCON.IN's optimal tip-speed ratio
     # and region-2 gain below rated, its rated torque and the balancing pitch above)
+    discon = d.path / "DISCON.IN"
     w_rated = d.rated_rotor_speed
-    om0 = min(discon_value("VS_TSRopt") * wind_speed / d.tip_radius, w_rated)
-    t_gen = discon_value("VS_Rgn2K") * (d.gear_ratio * om0) ** 2  # high-speed shaft, N m
+    om0 = min(discon_value("VS_TSRopt", discon) * wind_speed / d.tip_radius, w_rated)
+    t_gen = discon_value("VS_Rgn2K", discon) * (d.gear_ratio * om0) ** 2  # high-speed shaft
     pitch = 0.0
     if om0 >= w_rated:
-        t_gen = discon_value("VS_RtTq")
+        t_gen = discon_value("VS_RtTq", discon)
         pitch = blade_pitch_for_torque(rot, wind_speed, om0, t_gen * d.gear_ratio)
     u = np.full((rot.blades, len(rot.r)), float(wind_speed))
     q = rot.loads(om0, 0.0, u, np.zeros_like(u), reset=True, pitch=pitch)["torque_Nm"]
@@ -230,7 +231,7 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
                  q0="equilibrium", reference="follow", rebase_dt=dt, record=False,
                  outputs=["rotor.theta.velocity", "generator.theta.velocity"])
     rows = []
-    with Rosco(dt=dt, pitch0=pitch, efficiency=d.generator_efficiency) as ctrl:
+    with Rosco(discon, dt=dt, pitch0=pitch, efficiency=d.generator_efficiency) as ctrl:
         y = st.values()
         for k in range(n):
             t = k * dt
