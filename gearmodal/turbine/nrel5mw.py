@@ -24,8 +24,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
+from ..integrate.stepper import Stepper
+from ..model.bearing import Bearing
+from ..model.components import RigidBody
+from ..model.model import Model
 from .airfoil import Airfoil
-from .rosco import rosco_files
+from .rosco import Rosco, discon_value, rosco_files
 from .rotor import Rotor
 
 
@@ -161,10 +165,6 @@ def drivetrain(deck: Deck | None = None):
     blades) and the generator (its inertia times the gear ratio squared) joined by ElastoDyn's
     drivetrain spring and damper; the generator's speed and torque on the high-speed shaft are
     the gear ratio times and over its own."""
-    from ..model.bearing import Bearing
-    from ..model.components import RigidBody
-    from ..model.model import Model
-
     d = read_deck() if deck is None else deck
     m = Model("nrel5mw_drivetrain", input="rotor")
     m.add(RigidBody(name="rotor", mass=1.0, inertia=d.rotor_inertia, dofs="torsional",
@@ -205,9 +205,6 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
     rated torque above rated. Returns the means over the last ``average`` s: rotor speed
     (rpm), pitch (deg), electrical power (kW: generator torque times speed times the
     generator efficiency), tip-speed ratio, Cp (aerodynamic power over the wind's)."""
-    from ..integrate.stepper import Stepper
-    from .rosco import Rosco, discon_value
-
     d = read_deck() if deck is None else deck
     rot = rotor(d)
     n, m_aero = round(t_end / dt), max(1, round(aero_dt / dt))
