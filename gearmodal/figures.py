@@ -40,6 +40,8 @@ FIGURES: tuple[Figure, ...] = (
            ("--speeds", "0:30:5")),
     Figure("600kw_campbell_low.png", ("campbell", "600kw"), "campbell_low.png",
            ("--speeds", "0:30:5")),
+    Figure("nrel5mw_campbell_low.png", ("campbell", "nrel5mw", "--speeds", "0:13:27"),
+           "campbell_low.png", ("--speeds", "0:13:3")),
     Figure("gear_rattle_forces.png", ("simulate", "gear_rattle"), "forces.png",
            ("--t-end", "0.02")),
     Figure("planetary_double_contact_forces.png", ("simulate", "planetary_double_contact"),

@@ -416,7 +416,8 @@ TOML_CASES = [
      r"^wheel: unknown section for type = 'gear_pair'; allowed: model, gear_pair$"),
     ("ring-teeth", PLANETARY_TOML, "teeth = 99", "teeth = 98",
      r"^planetary_stage\.ring\.teeth = 98: ring teeth must equal sun \+ 2 \* planet "
-     r"\(21 \+ 2 \* 39 = 99\)$"),
+     r"\(21 \+ 2 \* 39 = 99\), or give the stage's centre_distance \(profile-shifted "
+     r"gears\)$"),
     ("unequal-spacing", PLANETARY_TOML, "n_planets = 3", "n_planets = 7",
      r"^planetary_stage\.n_planets = 7: planets cannot be equally spaced, .*give "
      r"planet_angles_deg$"),

@@ -372,6 +372,28 @@ def _planets_fit(name: str, given: bool, psi: list, centre: float, planet: Gear,
                                  f"({360.0 / teeth:.6g} deg); {k:.4f} pitches is not")
 
 
+def _operating_angle(field: str, a: float, rb_sum: float, pair: str) -> float:
+    """The operating transverse pressure angle of a pair at centre distance ``a`` (m):
+    ``cos(alpha_w) = rb_sum / a``, ``rb_sum`` the base radii's sum (external pair) or
+    difference (internal pair) (ISO 21771, the operating pressure angle of profile-shifted
+    gears; the line of action stays tangent to both base circles)."""
+    c = rb_sum / a
+    if not math.cos(math.pi / 4) < c < 1.0:
+        raise ModelError(field, f"= {a!r} m: with base radii {pair} = {rb_sum:.6g} m the "
+                         f"operating pressure angle acos({c:.6g}) is outside (0, 45) deg; the "
+                         f"centre distance must lie in ({rb_sum:.6g}, "
+                         f"{rb_sum / math.cos(math.pi / 4):.6g}) m")
+    return math.acos(c)
+
+
+def _needs_contact_ratio(field: str, spec: dict) -> None:
+    """With a centre distance (profile-shifted gears) the default contact ratio, computed for
+    standard gears, does not apply: an alternating mesh must state its own."""
+    if spec.get("alternation") and "contact_ratio" not in spec:
+        raise ModelError(f"{field}.contact_ratio", "required with centre_distance: the default "
+                         "is computed for standard gears without profile shift")
+
+
 def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
                     carrier_mass: float, carrier_inertia: float,
                     mesh_stiffness, backlash: float = 0.0, mesh_damping: float = 0.0,
@@ -380,12 +402,13 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
                     carrier_inertia_diametral: float | None = None,
                     name: str = "planetary_stage", mesh_alternation=None, pin_errors=None,
                     tooth_thickness_errors=None, runout=None,
-                    transmission_error=None) -> Model:
+                    transmission_error=None, centre_distance: float | None = None) -> Model:
     """A planetary stage with carrier input and the ring held (the wind-turbine layout).
 
     Parameters
     ----------
-    sun, planet, ring : :class:`Gear` (``ring.internal = True``; ring teeth = sun + 2 planet).
+    sun, planet, ring : :class:`Gear` (``ring.internal = True``; ring teeth = sun + 2 planet
+        unless ``centre_distance`` is given).
     n_planets : number of planets; equally spaced unless ``planet_angles`` (rad) is given.
     carrier_mass : kg. carrier_inertia : kg m^2 about the axis.
     mesh_stiffness : N/m, a number or a table ``sun_planet``, ``ring_planet``.
@@ -410,6 +433,12 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
     transmission_error : ``[(amplitude_m, phase_rad), ...]`` harmonics of the mesh frequency
         on every mesh (or a table ``sun_planet``, ``ring_planet``), planet n's phased by the
         planet spacing as ``mesh_alternation`` is (:class:`Mesh`).
+    centre_distance : m, the operating centre distance of profile-shifted gears (sun to
+        planet = planet to ring); each mesh then runs at its own operating pressure angle,
+        ``cos(alpha_w) = (r_b,sun + r_b,planet) / a`` and ``(r_b,ring - r_b,planet) / a``, and
+        the ring's teeth need not be sun + 2 planet (the speed ratios stay the tooth counts'). An
+        alternating mesh then needs its ``contact_ratio``. Default: the standard centre
+        distance of unshifted gears.
 
     Notes
     -----
@@ -429,9 +458,10 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         raise ModelError(f"{name}.sun.internal", "sun and planet must be external gears")
     _same_tooth_system(f"{name}.planet", s, p)
     _same_tooth_system(f"{name}.ring", p, r, internal=True)
-    if r.teeth != s.teeth + 2 * p.teeth:
+    if centre_distance is None and r.teeth != s.teeth + 2 * p.teeth:
         raise ModelError(f"{name}.ring.teeth", f"= {r.teeth}: ring teeth must equal sun + 2 * "
-                         f"planet ({s.teeth} + 2 * {p.teeth} = {s.teeth + 2 * p.teeth})")
+                         f"planet ({s.teeth} + 2 * {p.teeth} = {s.teeth + 2 * p.teeth}), or "
+                         "give the stage's centre_distance (profile-shifted gears)")
     if planet_angles is None and (s.teeth + r.teeth) % n_planets:
         raise ModelError(f"{name}.n_planets", f"= {n_planets}: planets cannot be equally "
                          f"spaced, (sun + ring teeth) = {s.teeth + r.teeth} is not divisible "
@@ -455,7 +485,16 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
             raise ModelError(f"{name}.mesh_stiffness", "needs sun_planet and ring_planet")
     else:
         k_sp = k_rp = mesh_stiffness
-    centre = (s.base_radius + p.base_radius) / math.cos(s.transverse_pressure_angle)
+    alpha_w = dict.fromkeys(("sun_planet", "ring_planet"))  # None: the gears' own angle
+    if centre_distance is None:
+        centre = (s.base_radius + p.base_radius) / math.cos(s.transverse_pressure_angle)
+    else:
+        field = f"{name}.centre_distance"
+        centre = v.positive(field, centre_distance, "m")
+        alpha_w["sun_planet"] = _operating_angle(field, centre, s.base_radius + p.base_radius,
+                                                 "sun + planet")
+        alpha_w["ring_planet"] = _operating_angle(field, centre, r.base_radius - p.base_radius,
+                                                  "ring - planet")
     _planets_fit(name, planet_angles is not None, psi, centre, p, s.teeth + r.teeth)
 
     m = Model(name, input="carrier")
@@ -505,11 +544,13 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
         for kind, gear, frac in (("sun_planet", "sun", -s.teeth * a / (2 * math.pi)),
                                  ("ring_planet", "ring", r.teeth * a / (2 * math.pi))):
             spec = _alternation(alt, mesh_alternation, kind, frac)
+            if centre_distance is not None:
+                _needs_contact_ratio(alt, spec)
             if te[kind]:
                 spec.setdefault("phase", frac)  # also the transmission error's phase
             m.add(Mesh(f"{gear}_{pl}", gear, pl, k_sp if kind == "sun_planet" else k_rp,
                        backlash, mesh_damping, side=-1, role=kind, planet=pl,
-                       transmission_error=te[kind], **spec))
+                       transmission_error=te[kind], pressure_angle=alpha_w[kind], **spec))
     m.groups["planets"] = [f"planet{n}" for n in range(1, n_planets + 1)]
     m.output = "sun"
     return m.check()
@@ -518,13 +559,16 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
 def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash: float = 0.0,
                    mesh_damping: float = 0.0, gear_bearing=None, pinion_bearing=None,
                    dofs: str = "planar", position=(0.0, 0.0), angle: float = 0.0,
-                   name: str = "parallel_stage", mesh_alternation=None) -> Model:
+                   name: str = "parallel_stage", mesh_alternation=None,
+                   centre_distance: float | None = None) -> Model:
     """A parallel (speed-increasing) stage: ``gear`` (input, the large wheel) drives ``pinion``.
 
     ``position`` (m) is the centre of ``gear`` in the housing plane and ``angle`` (rad) the
     direction from it to the pinion. Bearings (N/m or tables, see :class:`Bearing`) go to the
     ground, or to the housing inside a drivetrain. A positive torque on ``gear`` closes the front
-    flank. ``mesh_alternation``: as for :func:`gear_pair`.
+    flank. ``mesh_alternation``: as for :func:`gear_pair`. ``centre_distance`` (m): the
+    operating centre distance of profile-shifted gears, the mesh then at its operating pressure
+    angle ``cos(alpha_w) = (r_b,gear + r_b,pinion) / a`` (default: the standard one).
     """
     v.choice(f"{name}.dofs", dofs, DOF_LEVELS)
     g = _gear(gear, f"{name}.gear", "gear", dofs)
@@ -534,7 +578,15 @@ def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash:
     _same_tooth_system(f"{name}.pinion", g, p)
     angle = v.number(f"{name}.angle", angle, "rad")
     x0, y0 = (v.number(f"{name}.position", c, "m") for c in position)
-    centre = (g.base_radius + p.base_radius) / math.cos(g.transverse_pressure_angle)
+    alt = _alternation(f"{name}.mesh_alternation", mesh_alternation)
+    if centre_distance is None:
+        centre = (g.base_radius + p.base_radius) / math.cos(g.transverse_pressure_angle)
+    else:
+        field = f"{name}.centre_distance"
+        centre = v.positive(field, centre_distance, "m")
+        alt["pressure_angle"] = _operating_angle(field, centre, g.base_radius + p.base_radius,
+                                                 "gear + pinion")
+        _needs_contact_ratio(f"{name}.mesh_alternation", alt)
     g.position, g.speed_ratio, g.role, p.role = (x0, y0, 0.0), 1.0, "gear", "pinion"
     p.position = (x0 + centre * math.cos(angle), y0 + centre * math.sin(angle), 0.0)
     p.speed_ratio = -g.teeth / p.teeth
@@ -542,7 +594,7 @@ def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash:
     m.add(g)
     m.add(p)
     m.add(Mesh("mesh", "gear", "pinion", mesh_stiffness, backlash, mesh_damping, side=1,
-               role="mesh", **_alternation(f"{name}.mesh_alternation", mesh_alternation)))
+               role="mesh", **alt))
     for label, spec, body in (("gear_bearing", gear_bearing, "gear"),
                               ("pinion_bearing", pinion_bearing, "pinion")):
         sup = _support(f"{name}.{label}", spec, dofs)

@@ -384,8 +384,8 @@ def _planetary(path: str, value, in_drivetrain: bool = False) -> Model:
     k = _per_mesh(_join(path, "mesh_stiffness"), t["mesh_stiffness"])
     angles = t.get("planet_angles")
     n = t["n_planets"]
-    if angles is None and ring.teeth == sun.teeth + 2 * planet.teeth \
-            and (sun.teeth + ring.teeth) % n:
+    if angles is None and (sun.teeth + ring.teeth) % n and (
+            "centre_distance" in t or ring.teeth == sun.teeth + 2 * planet.teeth):
         raise _err(_join(path, "n_planets"), f"= {n}: planets cannot be equally spaced, (sun + "
                    f"ring teeth) = {sun.teeth + ring.teeth} is not divisible by {n}; give "
                    "planet_angles_deg")
@@ -406,7 +406,8 @@ def _planetary(path: str, value, in_drivetrain: bool = False) -> Model:
             tooth_thickness_errors=t.get("tooth_thickness_errors"),
             runout=_degrees_pairs(_join(path, "runout"), t.get("runout"), table=True),
             transmission_error=_degrees_pairs(_join(path, "transmission_error"),
-                                              t.get("transmission_error")), **supports)
+                                              t.get("transmission_error")),
+            centre_distance=t.get("centre_distance"), **supports)
 
 
 def _degrees_pairs(path: str, value, table: bool = False):
@@ -440,7 +441,8 @@ def _parallel(path: str, value, in_drivetrain: bool = False) -> Model:
         return builders.parallel_stage(
             gear, pinion, mesh_stiffness=t["mesh_stiffness"], backlash=t["backlash"],
             mesh_damping=t["mesh_damping"], dofs=t["dofs"], position=tuple(t["position"]),
-            angle=t["angle"], mesh_alternation=t["mesh_alternation"], **supports)
+            angle=t["angle"], mesh_alternation=t["mesh_alternation"],
+            centre_distance=t.get("centre_distance"), **supports)
 
 
 def _gear_pair(path: str, value) -> Model:
