@@ -55,6 +55,22 @@ class AzimuthAssembler:
 
     def __init__(self, model, degree: int = DEGREE):
         self.model = model
+        ratios = sorted({abs(float(f.speed_ratio)) for f in model.frames.values()} - {0.0})
+        if all(r == 1.0 for r in ratios):
+            self._fit_revolution(degree)
+        else:
+            self._fit_orders(degree, ratios)
+        self._add_waves(self.template.contacts.waves)
+        check = model.assemble(azimuth=CHECK_AZIMUTH)
+        got = self._values(CHECK_AZIMUTH)
+        self.exact = all(
+            np.allclose(got[k], v, rtol=0, atol=CHECK_RTOL * max(np.abs(v).max(initial=0), 1e-30))
+            for k, v in _arrays(check, waves=True).items())
+
+    def _fit_revolution(self, degree: int) -> None:
+        """Frames at speed ratios 0 and 1: the discrete Fourier coefficients of ``2 D + 1``
+        assemblies over one revolution (module docstring)."""
+        model = self.model
         n_s = 2 * degree + 1
         self.harmonics = np.arange(degree + 1)
         psi = 2 * math.pi * np.arange(n_s) / n_s
@@ -86,12 +102,52 @@ class AzimuthAssembler:
                 self.constant[key] = a[0].copy()
         self.harmonics = self.harmonics[:top + 1].astype(float)
         self.coef = {k: (a[:top + 1], b[:top + 1]) for k, (a, b) in self.coef.items()}
-        self._add_waves(self.template.contacts.waves)
-        check = model.assemble(azimuth=CHECK_AZIMUTH)
-        got = self._values(CHECK_AZIMUTH)
-        self.exact = all(
-            np.allclose(got[k], v, rtol=0, atol=CHECK_RTOL * max(np.abs(v).max(initial=0), 1e-30))
-            for k, v in _arrays(check, waves=True).items())
+
+    def _fit_orders(self, degree: int, ratios: list[float]) -> None:
+        """Frames at other speed ratios (a second planetary stage's carrier at 75/19 of the
+        input): every assembled entry is a trigonometric polynomial whose orders are the sums
+        ``sum_f n_f r_f`` of at most ``D`` frame ratios (each row a product of at most two
+        frame rotations, each matrix of two rows), not whole numbers and not periodic in one
+        revolution. Its coefficients at those orders are fitted by least squares to
+        assemblies at ``N`` azimuths ``N`` golden-angle steps apart (2.4 rad each,
+        so the span resolves the closest two orders), ``N`` three times the unknowns; the
+        residual at the samples and the off-grid check (module docstring) confirm the fit."""
+        model = self.model
+        orders = {0.0}
+        for _ in range(degree):
+            orders |= {abs(o + s * r) for o in orders for r in ratios for s in (1.0, -1.0)}
+        orders = np.array(sorted(orders))
+        keep = np.concatenate([[True], np.diff(orders) > 1e-9])
+        self.harmonics = orders[keep]
+        hs = self.harmonics
+        n_s = 3 * (2 * len(hs) - 1)
+        psi = math.pi * (3.0 - math.sqrt(5.0)) * np.arange(n_s)  # golden angle steps
+        V = np.concatenate([np.cos(np.outer(psi, hs)), np.sin(np.outer(psi, hs[1:]))], axis=1)
+        samples = [model.assemble(azimuth=float(p)) for p in psi]
+        self.template = samples[0]
+        self.coef = {}
+        self.constant = {}
+        H = len(hs)
+        for key in _arrays(samples[0]):
+            arr = np.stack([_arrays(s)[key] for s in samples])
+            flat = arr.reshape(n_s, -1)
+            sol, *_ = np.linalg.lstsq(V, flat, rcond=None)
+            a = sol[:H].reshape((H,) + arr.shape[1:])
+            b = np.concatenate([np.zeros((1,) + arr.shape[1:]),
+                                sol[H:].reshape((H - 1,) + arr.shape[1:])])
+            scale = max(float(np.abs(flat).max(initial=0.0)), 1e-300)
+            a[np.abs(a) <= 1e-13 * scale] = 0.0  # rounding of the fit
+            b[np.abs(b) <= 1e-13 * scale] = 0.0
+            if not np.any(a[1:]) and not np.any(b[1:]):
+                self.constant[key] = a[0].copy()
+            self.coef[key] = (a, b)
+        live = np.zeros(H, bool)
+        live[0] = True
+        for key, (a, b) in self.coef.items():
+            if key not in self.constant:
+                live |= (np.abs(a) + np.abs(b)).reshape(H, -1).max(axis=1) > 0
+        self.harmonics = hs[live]
+        self.coef = {k: (a[live], b[live]) for k, (a, b) in self.coef.items()}
 
     def with_mass(self, M: np.ndarray) -> AzimuthAssembler:
         """A copy whose (constant) mass matrix is ``M`` (the mass-scaling rung,

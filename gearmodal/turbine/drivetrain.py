@@ -277,7 +277,7 @@ def couple(turbine: Turbine, wind: Wind, gearbox, t_end: float, *, dt: float = 2
            rebase_speed: float = 0.01, rebase_angle: float = 5e-4, method: str = "exact",
            gravity: bool | float = True, top_frequency_hz: float | None = None,
            peak_bin: float | None = PEAK_BIN, turning_points: bool = True, out=None,
-           **options) -> Coupling:
+           controller=None, **options) -> Coupling:
     """Turbine and gearbox set up to run together from ``rotor_speed0_rpm`` for ``t_end`` s
     (:func:`simulate_drivetrain` runs them; a host's own loop over the public API may).
 
@@ -316,6 +316,10 @@ def couple(turbine: Turbine, wind: Wind, gearbox, t_end: float, *, dt: float = 2
         Parquet row groups of the gearbox rows and of the turbine loads); the result reads
         its tables from there when first asked for, so the run's memory does not grow with
         its duration. ``None``: every row is held in memory.
+    controller : for a turbine whose ``generator`` is None, what sets the generator torque and
+        the pitch every ``aero_dt`` (:class:`gearmodal.turbine.rosco.Rosco`, or any object
+        with its ``step`` and ``pitch``: :class:`~gearmodal.turbine.plant.TurbinePlant`); the
+        caller owns it (opens and closes it).
     """
     if not isinstance(turning_points, bool):
         raise ModelError("turning_points", f"= {turning_points!r}: True or False")
@@ -346,7 +350,7 @@ def couple(turbine: Turbine, wind: Wind, gearbox, t_end: float, *, dt: float = 2
     if out is not None:
         Path(out).mkdir(parents=True, exist_ok=True)
     plant = TurbinePlant(turbine, wind, gearbox, aero_dt=aero_dt, aero_hold=aero_hold,
-                         gravity=g, connected=connected, out=out)
+                         gravity=g, connected=connected, out=out, controller=controller)
     n_aero = int(math.ceil(t_end / aero_dt - 1e-9))
     # -- the coupled loop, on the public stepping API: the plant reads the gearbox's outputs
     # at each aerodynamic step's start and gives the loads over it; the stepper re-bases its
@@ -369,6 +373,7 @@ def couple(turbine: Turbine, wind: Wind, gearbox, t_end: float, *, dt: float = 2
                 "rebase_speed": rebase_speed, "rebase_angle": rebase_angle,
                 "method": method, "options": options, "gravity_mps2": g,
                 "turning_points": turning_points, "top_frequency_hz": top_frequency_hz,
+                "controller": None if controller is None else type(controller).__name__,
                 "mass_scaling": st.settings["mass_scaling"], "speed_rpm": None,
                 "shaft_end_force": "on the carrier" if plant.bending else "not modelled (the "
                 "first stage's carrier has no translation)",

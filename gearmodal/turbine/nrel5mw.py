@@ -28,9 +28,14 @@ from ..integrate.stepper import Stepper
 from ..model.bearing import Bearing
 from ..model.components import RigidBody
 from ..model.model import Model
+from ..model.toml_io import load
+from ..shipped import find
 from .airfoil import Airfoil
+from .drivetrain import DrivetrainResult, simulate_drivetrain
 from .rosco import Rosco, discon_value, rosco_files
 from .rotor import Rotor
+from .turbine import Turbine
+from .wind import Wind
 
 
 @dataclass(frozen=True)
@@ -48,7 +53,11 @@ class Deck:
     equivalent). rated_rotor_speed : rad/s (ElastoDyn's initial speed). generator_efficiency :
     0..1. air_density : kg/m^3. hub_height : m. span, chord, twist, airfoil_id : AeroDyn's
     blade nodes (m from the root, m, rad, index into ``airfoils``). airfoils : the polars.
-    path : the deck's folder.
+    path : the deck's folder. rotor_mass : kg, the hub's and the blades' (their mass density
+    integrated). overhang : m, the hub centre upwind of the yaw axis (ElastoDyn's OverHang,
+    negative there for an upwind rotor; given here positive). tower_top_radius : m
+    (ElastoDyn's tower file is not read: the tower's top diameter, 3.87 m, from the definition
+    report, Table 6-1).
     """
 
     tip_radius: float
@@ -72,6 +81,9 @@ class Deck:
     airfoil_id: np.ndarray
     airfoils: tuple
     path: Path
+    rotor_mass: float = 0.0
+    overhang: float = 0.0
+    tower_top_radius: float = 3.87 / 2
 
 
 def read_deck(path=None) -> Deck:
@@ -100,6 +112,7 @@ def read_deck(path=None) -> Deck:
     mass = np.asarray(edb["BMassDen"], dtype=float) * float(edb["AdjBlMs"])
     trapezoid = getattr(np, "trapezoid", None) or np.trapz  # numpy < 2: trapz
     j_blade = float(trapezoid(mass * (float(ed["HubRad"]) + s_b) ** 2, s_b))
+    m_blade = float(trapezoid(mass, s_b))
     blade = vt["AeroDynBlade"]
     blade = blade[0] if isinstance(blade, list) else blade
     foils = []
@@ -125,7 +138,9 @@ def read_deck(path=None) -> Deck:
                 chord=np.asarray(blade["BlChord"], dtype=float),
                 twist=np.radians(np.asarray(blade["BlTwist"], dtype=float)),
                 airfoil_id=np.asarray(blade["BlAFID"], dtype=np.int64) - 1,
-                airfoils=tuple(foils), path=path)
+                airfoils=tuple(foils), path=path,
+                rotor_mass=float(ed["HubMass"]) + int(ed["NumBl"]) * m_blade,
+                overhang=-float(ed["OverHang"]))
 
 
 def rotor(deck: Deck | None = None) -> Rotor:
@@ -136,7 +151,8 @@ def rotor(deck: Deck | None = None) -> Rotor:
     return Rotor(radius=d.tip_radius, hub_radius=d.hub_radius,
                  r=d.hub_radius + d.span[inner], chord=d.chord[inner], twist=d.twist[inner],
                  blades=d.blades, airfoils=list(d.airfoils), airfoil_id=d.airfoil_id[inner],
-                 airfoil=d.airfoils[0], rho=d.air_density, correction="buhl")
+                 airfoil=d.airfoils[0], rho=d.air_density, correction="buhl",
+                 mass=d.rotor_mass)
 
 
 def cp_table(path=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -195,6 +211,21 @@ def blade_pitch_for_torque(rot, wind_speed: float, omega: float, torque: float) 
     return 0.5 * (lo + hi)
 
 
+def steady_start(deck: Deck, rot: Rotor, wind_speed: float) -> tuple[float, float, float]:
+    """The controller's own steady state in uniform ``wind_speed`` (m/s): ``(rotor speed
+    rad/s, pitch rad, generator torque N m)``: its DISCON.IN's optimal tip-speed ratio and
+    region-2 gain below rated, its rated torque and the balancing pitch above."""
+    discon = deck.path / "DISCON.IN"
+    w_rated = deck.rated_rotor_speed
+    om0 = min(discon_value("VS_TSRopt", discon) * wind_speed / deck.tip_radius, w_rated)
+    t_gen = discon_value("VS_Rgn2K", discon) * (deck.gear_ratio * om0) ** 2  # high-speed shaft
+    pitch = 0.0
+    if om0 >= w_rated:
+        t_gen = discon_value("VS_RtTq", discon)
+        pitch = blade_pitch_for_torque(rot, wind_speed, om0, t_gen * deck.gear_ratio)
+    return om0, pitch, t_gen
+
+
 def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None = None,
                    dt: float = 0.00625, aero_dt: float = 0.0125, average: float = 10.0) -> dict:
     """The 5 MW turbine in steady uniform wind ``wind_speed`` (m/s) for ``t_end`` s, ROSCO
@@ -211,16 +242,7 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
     if not (wind_speed > 0 and n > 0 and average < t_end):
         raise ModelError("wind_speed", f"= {wind_speed!r} m/s, t_end = {t_end!r} s: a wind "
                          "speed > 0 and a run longer than the averaging window")
-    # the start: the controller's own steady state (its DISCON.IN's optimal tip-speed ratio
-    # and region-2 gain below rated, its rated torque and the balancing pitch above)
-    discon = d.path / "DISCON.IN"
-    w_rated = d.rated_rotor_speed
-    om0 = min(discon_value("VS_TSRopt", discon) * wind_speed / d.tip_radius, w_rated)
-    t_gen = discon_value("VS_Rgn2K", discon) * (d.gear_ratio * om0) ** 2  # high-speed shaft
-    pitch = 0.0
-    if om0 >= w_rated:
-        t_gen = discon_value("VS_RtTq", discon)
-        pitch = blade_pitch_for_torque(rot, wind_speed, om0, t_gen * d.gear_ratio)
+    om0, pitch, t_gen = steady_start(d, rot, wind_speed)
     u = np.full((rot.blades, len(rot.r)), float(wind_speed))
     q = rot.loads(om0, 0.0, u, np.zeros_like(u), reset=True, pitch=pitch)["torque_Nm"]
     st = Stepper(drivetrain(d), dt=dt, speed_rpm=om0 * 30 / math.pi,
@@ -228,7 +250,8 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
                  q0="equilibrium", reference="follow", rebase_dt=dt, record=False,
                  outputs=["rotor.theta.velocity", "generator.theta.velocity"])
     rows = []
-    with Rosco(discon, dt=dt, pitch0=pitch, efficiency=d.generator_efficiency) as ctrl:
+    with Rosco(d.path / "DISCON.IN", dt=dt, pitch0=pitch,
+               efficiency=d.generator_efficiency) as ctrl:
         y = st.values()
         for k in range(n):
             t = k * dt
@@ -248,3 +271,49 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
             "tsr": w_r * d.tip_radius / wind_speed,
             "cp": p_aero / (0.5 * d.air_density * math.pi * d.tip_radius**2 * wind_speed**3)}
 
+
+
+def turbine(deck: Deck | None = None) -> Turbine:
+    """The 5 MW turbine's side for a coupled run with its gearbox (:func:`simulate`): the BEM
+    rotor with its weight, no induction generator (ROSCO sets torque and pitch), hub height
+    and shaft tilt from the deck. The main bearings are estimates (the deck has none): the
+    front one 1.9 m downwind of the hub centre (at ElastoDyn's shaft strain gauge, ShftGagL
+    1.912 m), the rear one 2.0 m further (the main shaft of Nejad et al.'s 5 MW drivetrain
+    model); the rear one's reaction is the shaft-end force on the gearbox's carrier."""
+    d = read_deck() if deck is None else deck
+    return Turbine(rotor=rotor(d), generator=None, gear_ratio=d.gear_ratio,
+                   inertia=d.rotor_inertia + d.generator_inertia * d.gear_ratio**2,
+                   hub_height=d.hub_height, front_bearing=1.9, rear_bearing=3.9,
+                   tilt_deg=-math.degrees(d.shaft_tilt), name="nrel5mw")
+
+
+def wind(mean_speed: float, *, deck: Deck | None = None, **kw) -> Wind:
+    """A :class:`~.wind.Wind` for the 5 MW rotor: hub height from the deck, the turbulence
+    grid over 1.1 tip radii, the tower's top radius and the rotor's overhang for the tower
+    shadow; ``kw`` as :class:`~.wind.Wind` (``turbulence_intensity``, ``seed``,
+    ``duration``, ``model``...)."""
+    d = read_deck() if deck is None else deck
+    kw = {"hub_height": d.hub_height, "half_width": 1.1 * d.tip_radius,
+          "tower_radius": d.tower_top_radius, "tower_distance": d.overhang, **kw}
+    return Wind(mean_speed=mean_speed, **kw)
+
+
+def simulate(wind: Wind, t_end: float, *, gearbox=None, deck: Deck | None = None,
+             dt: float = 2.5e-3, aero_dt: float = 0.0125, progress=None,
+             **settings) -> DrivetrainResult:
+    """The NREL 5 MW turbine on its gearbox for ``t_end`` s in ``wind``: the BEM rotor, ROSCO
+    (the deck's DISCON.IN, called every ``aero_dt``) and the gearbox's contact dynamics by the
+    exact method (:func:`gearmodal.turbine.simulate_drivetrain`, whose ``settings`` apply:
+    ``method``, ``top_frequency_hz``, ``out``...). ``gearbox``: a drivetrain model
+    (default: ``studies/models/nrel5mw.toml``, the 5 MW reference gearbox). Starts from the
+    controller's steady state at the wind's mean speed (:func:`steady_start`)."""
+    d = read_deck() if deck is None else deck
+    if gearbox is None:
+        gearbox = load(find("nrel5mw", "models"))
+    tur = turbine(d)
+    om0, pitch, _ = steady_start(d, tur.rotor, wind.mean_speed)
+    settings.setdefault("rotor_speed0_rpm", om0 * 30 / math.pi)
+    with Rosco(d.path / "DISCON.IN", dt=aero_dt, pitch0=pitch,
+               efficiency=d.generator_efficiency) as ctrl:
+        return simulate_drivetrain(tur, wind, gearbox, t_end, dt=dt, aero_dt=aero_dt,
+                                   controller=ctrl, progress=progress, **settings)

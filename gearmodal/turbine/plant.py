@@ -21,6 +21,13 @@ Loads across an aerodynamic step (``aero_hold``):
 The induction generator is a :class:`gearmodal.SpeedTorque` (its torque-slip curve, taken
 implicitly at the reference speed: the stiff slip damping sets no step limit); it is off the
 grid (no torque) until the generator reaches synchronous speed, unless ``connected``.
+
+A controlled turbine (``Turbine.generator`` None, a ``controller`` given: ROSCO for the NREL
+5 MW turbine) is called once per aerodynamic step, at its start, with the gearbox's measured
+generator and rotor speeds, the pitch and torque it last demanded and the hub-height wind
+(:meth:`gearmodal.turbine.rosco.Rosco.step`'s signature); its generator torque is the load
+``generator.torque`` (with the other loads across the step, ``aero_hold``) and its pitch is
+the blades' from that step on. It is on the grid from the start.
 """
 
 from __future__ import annotations
@@ -70,11 +77,15 @@ class TurbinePlant:
     gravity : g, m/s^2 (0: none), on every gearbox body (the load ``gravity``).
     connected : the generator on the grid from the start.
     out : a directory the turbine loads stream to (``turbine_loads``), or None (in memory).
+    controller : for a turbine without an induction generator: an object with
+        ``step(t, generator_speed, rotor_speed, pitch, generator_torque, wind_speed) ->
+        (generator_torque, pitch)`` (N m on the high-speed shaft, rad; module docstring)
+        called every ``aero_dt``, and ``pitch`` (rad), the pitch it starts from.
     """
 
     def __init__(self, turbine: Turbine, wind: Wind, gearbox, *, aero_dt: float,
                  aero_hold: str = "interpolate", gravity: float = 0.0,
-                 connected: bool = False, out=None):
+                 connected: bool = False, out=None, controller=None):
         if aero_hold not in HOLDS:
             raise ModelError("aero_hold", f"= {aero_hold!r}: must be one of {HOLDS}")
         self.turbine, self.wind = turbine, wind
@@ -92,7 +103,14 @@ class TurbinePlant:
         self.sg = math.copysign(1.0, ratio)  # the generator's forward sense
         # the mounting: the input azimuth is planet 1's, blade 1's plus this
         self.mount = math.radians(turbine.mounting_azimuth_deg) + 0.5 * math.pi
-        self.on = bool(connected)
+        if (turbine.generator is None) == (controller is None):
+            raise ModelError("controller", "a turbine with an induction generator takes no "
+                             "controller" if controller is not None else "required: the "
+                             "turbine has no induction generator (Turbine.generator is None)")
+        self.controller = controller
+        self.pitch = float(controller.pitch) if controller is not None else turbine.rotor.pitch
+        self.t_gen = 0.0  # the controller's last torque demand, N m
+        self.on = bool(connected) or controller is not None
         self.cut_in = 0.0 if self.on else None
         self.switched = False
         self.clock = {"aero_s": 0.0, "wind_s": 0.0, "wind_setup_s": 0.0}
@@ -113,7 +131,7 @@ class TurbinePlant:
         gen, sg, on = self.turbine.generator, self.sg, self.on
 
         def law(w: float) -> tuple[float, float]:
-            if not on:
+            if not on or gen is None:  # a controller's torque is a load (module docstring)
                 return 0.0, 0.0
             t, c = gen.tangent(sg * w)  # forward speed; torque against the rotation
             return -sg * t, -c
@@ -121,10 +139,13 @@ class TurbinePlant:
         return SpeedTorque("generator.theta", law)
 
     def loads(self, u: np.ndarray) -> dict:
-        """The gearbox loads of values ``u`` (rotor torque, shaft-end force y and z)."""
+        """The gearbox loads of values ``u`` (rotor torque, shaft-end force y and z, and with
+        a controller the generator torque on the high-speed shaft)."""
         out = {"rotor.torque": float(u[0])}
         if self.bending:
             out.update({self.carrier[0]: float(u[1]), self.carrier[1]: float(u[2])})
+        if self.controller is not None:
+            out["generator.torque"] = -self.sg * float(u[3])
         return out
 
     def constant_loads(self) -> dict:
@@ -139,6 +160,11 @@ class TurbinePlant:
         t = k * self.aero_dt
         psi = azimuth - self.mount  # blade 1
         turbine = self.turbine
+        w_gen = self.sg * generator_speed  # forward positive
+        if self.controller is not None:  # its demands from the measured speeds
+            hub = self.wind.velocity(t, np.zeros(1), np.full(1, turbine.hub_height))[0][0]
+            self.t_gen, self.pitch = self.controller.step(t, w_gen, speed, self.pitch,
+                                                          self.t_gen, float(hub))
         # aerodynamics at the rotor's actual azimuth and speed ("interpolate": also at the
         # end of the step, predicted with the current speed)
         if self.hold == "interpolate":
@@ -148,23 +174,25 @@ class TurbinePlant:
             ld = self._aero(t, psi, speed, k == 0)
         fy, fz = turbine.rear_force(ld)
         gen = turbine.generator
-        w_gen = self.sg * generator_speed  # forward positive
-        self.switched = not self.on and w_gen >= gen.omega_sync
-        if self.switched:
-            self.on, self.cut_in = True, t
-        tg = gen.torque(w_gen) if self.on else 0.0
+        if gen is None:
+            self.switched, tg = False, self.t_gen
+        else:
+            self.switched = not self.on and w_gen >= gen.omega_sync
+            if self.switched:
+                self.on, self.cut_in = True, t
+            tg = gen.torque(w_gen) if self.on else 0.0
         self.rows.append((t, speed / RPM, math.degrees(psi) % 360.0, self.on, tg, tg * w_gen,
-                          *(ld[c] for c in LOAD_COLUMNS), fy, fz))
+                          *(ld[c] for c in LOAD_COLUMNS), fy, fz, math.degrees(self.pitch)))
         if self.writer is not None and len(self.rows) >= ROWS_PER_WRITE:
             self.writer.append_frame(self.table())
             self.rows = []
-        u = np.array([ld["torque_Nm"], fy, fz])
+        u = np.array([ld["torque_Nm"], fy, fz, tg])
         now = self.loads(u)
         prev, self._prev = self._prev, u
         if self.hold == "interpolate":
             nxt = self._next
-            return Step(self.loads(np.array([nxt["torque_Nm"], *turbine.rear_force(nxt)])),
-                        now)
+            return Step(self.loads(np.array([nxt["torque_Nm"], *turbine.rear_force(nxt),
+                                             tg])), now)
         if self.hold == "linear" and prev is not None:
             return Step(self.loads(u + (u - prev)), now, start=now)
         return Step(now, now, hold="hold")
@@ -186,7 +214,7 @@ class TurbinePlant:
         tw = time.process_time()
         bw = self.turbine.blade_wind(self.wind, ta, psi)
         tv = time.process_time()
-        out = self.turbine.rotor.loads(om, psi, *bw, reset=reset)
+        out = self.turbine.rotor.loads(om, psi, *bw, reset=reset, pitch=self.pitch)
         self.clock["wind_s"] += tv - tw
         self.clock["aero_s"] += time.process_time() - tv
         return out

@@ -52,20 +52,23 @@ RPM = math.pi / 30
 #: columns of a turbine run's loads table (TurbineResult.loads, with "time" the index)
 TURBINE_COLUMNS = ["time", "rotor_speed_rpm", "azimuth_deg", "generator_connected",
                    "generator_torque_Nm", "power_W", *LOAD_COLUMNS, "rear_force_y_N",
-                   "rear_force_z_N"]
+                   "rear_force_z_N", "pitch_deg"]
 
 
 @dataclass
 class Turbine:
-    """A stall-regulated turbine. rotor : :class:`Rotor`. generator :
-    :class:`InductionGenerator`. gear_ratio : generator / rotor speed. inertia : drivetrain
+    """A turbine. rotor : :class:`Rotor`. generator : :class:`InductionGenerator` (a
+    stall-regulated, fixed-speed machine), or None when a controller sets the generator torque
+    and the pitch (a coupled run's ``controller``, e.g. :class:`~.rosco.Rosco` for the NREL
+    5 MW turbine: :func:`gearmodal.turbine.nrel5mw.turbine`). gear_ratio : generator / rotor
+    speed. inertia : drivetrain
     inertia at the rotor, kg m^2. hub_height, front_bearing, rear_bearing : m.
     mounting_azimuth_deg : azimuth of planet 1 relative to blade 1 (deg). tilt_deg : shaft
     tilt, the rotor end up (deg): the direction of gravity on the gearbox's bodies in a turbine
     run (the gearbox model's own ``tilt_deg`` is replaced by it)."""
 
     rotor: Rotor
-    generator: InductionGenerator
+    generator: InductionGenerator | None
     gear_ratio: float
     inertia: float
     hub_height: float = 40.0
@@ -335,6 +338,10 @@ def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 
         if not (isinstance(val, (int, float)) and math.isfinite(val) and val > lo):
             raise ModelError(label, f"= {val!r}: must be a finite number > 0 s")
     gen = turbine.generator
+    if gen is None:
+        raise ModelError("turbine.generator", "= None: a turbine-only run needs the induction "
+                         "generator; a controlled turbine runs coupled to its gearbox "
+                         "(simulate_drivetrain with a controller)")
     ratio = turbine.gear_ratio
     # generator slip stiffness at the rotor: ratio^2 dT/domega at synchronous speed
     c_gen = ratio**2 * gen.tangent(gen.omega_sync)[1]
@@ -363,7 +370,7 @@ def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 
         tg = gen_torque(omega)
         fy, fz = turbine.rear_force(ld)
         rows.append((t, omega / RPM, math.degrees(psi) % 360.0, on, tg, tg * omega * ratio,
-                     *(ld[c] for c in LOAD_COLUMNS), fy, fz))
+                     *(ld[c] for c in LOAD_COLUMNS), fy, fz, math.degrees(rot.pitch)))
         if k == n:
             break
         # explicit midpoint on (psi, omega)
