@@ -387,7 +387,7 @@ def build_parser() -> argparse.ArgumentParser:
                         + ", ".join(STUDIES))
     st.add_argument("study", choices=STUDIES)
     st.add_argument("turbine", nargs="?", help="the turbine a study runs on (power-curve: "
-                    "nrel5mw)")
+                    "nrel5mw; double-contact: 600kw, the default, or nrel5mw)")
     st.add_argument("--out", required=True, type=_out_folder,
                     help="output folder (its store/ makes a rerun resume)")
     st.add_argument("--duration", type=float, help="simulated time per case, s (turbine "

@@ -83,6 +83,20 @@ def effects(runs: pd.DataFrame, level: float = 0.95) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _nrel5mw():
+    """The 5 MW study module beside this one (registered by name, so that its functions
+    pickle into forked workers, as the CLI registers a study)."""
+    import importlib.util
+
+    name = "gearmodal_study_double_contact_nrel5mw"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, HERE / "double_contact_nrel5mw.py")
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+    return sys.modules[name]
+
+
 def cases(duration: float = 30.0, seed: int = 1, gravity: bool = True,
           top_frequency_hz: float | None = None, dt: float | None = None) -> pd.DataFrame:
     """The three cases as scene overrides (one row each, indexed by ``case``); ``gravity``:
@@ -152,10 +166,11 @@ def _verdicts(s: pd.DataFrame) -> list[str]:
     return out
 
 
-def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int = 1, gravity: bool = True,
-        executor=None, progress: bool = True, max_workers: int | None = None,
+def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int | None = None,
+        gravity: bool = True, executor=None, progress: bool = True,
+        max_workers: int | None = None,
         top_frequency_hz: float | None = STUDY_TOP_FREQUENCY_HZ,
-        dt: float | None = None) -> pd.DataFrame:
+        dt: float | None = None, turbine: str = "600kw") -> pd.DataFrame:
     """Run the three cases (stored in ``out/store``, resumable) and write the outputs;
     ``gravity=False`` leaves out the gearbox bodies' weight; ``top_frequency_hz``: the
     mass-scaling rung the cases run on (default 500 Hz, :mod:`gearmodal.massscale`; its error
@@ -163,7 +178,16 @@ def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int = 1, gravity: 
     of the seeds ``seed, seed + 1, ...`` (paired: the same turbulence for the three cases),
     runs.csv (one row per run), summary.csv (means over the seeds), effects.csv (each effect
     as a ratio with its 95 % interval over the seeds, gearmodal.paired) and the paper's
-    claims judged on the intervals. ``dt``: the output step, s (default: the scene's)."""
+    claims judged on the intervals. ``dt``: the output step, s (default: the scene's).
+    ``turbine="nrel5mw"``: the study on the NREL 5 MW turbine and its reference gearbox
+    (``double_contact_nrel5mw.py``; 3 seeds by default)."""
+    if turbine == "nrel5mw":
+        return _nrel5mw().run(out, duration=duration, seed=seed, seeds=seeds or 3,
+                              top_frequency_hz=study_rung(top_frequency_hz),
+                              max_workers=max_workers, progress=progress)
+    if turbine != "600kw":
+        raise gm.ModelError("turbine", f"= {turbine!r}: one of 600kw, nrel5mw")
+    seeds = 1 if seeds is None else seeds
     out = Path(out)
     top_frequency_hz = study_rung(top_frequency_hz)
     if seeds > 1:
