@@ -110,7 +110,7 @@ class AzimuthAssembler:
         frame rotations, each matrix of two rows), not whole numbers and not periodic in one
         revolution. Its coefficients at those orders are fitted by least squares to
         assemblies at ``N`` azimuths ``N`` golden-angle steps apart (2.4 rad each,
-        so the span resolves the closest two orders), ``N`` three times the unknowns; the
+        so the span resolves the closest two orders), ``N`` twice the unknowns; the
         residual at the samples and the off-grid check (module docstring) confirm the fit."""
         model = self.model
         orders = {0.0}
@@ -120,7 +120,7 @@ class AzimuthAssembler:
         keep = np.concatenate([[True], np.diff(orders) > 1e-9])
         self.harmonics = orders[keep]
         hs = self.harmonics
-        n_s = 3 * (2 * len(hs) - 1)
+        n_s = 2 * (2 * len(hs) - 1)
         psi = math.pi * (3.0 - math.sqrt(5.0)) * np.arange(n_s)  # golden angle steps
         V = np.concatenate([np.cos(np.outer(psi, hs)), np.sin(np.outer(psi, hs[1:]))], axis=1)
         samples = [model.assemble(azimuth=float(p)) for p in psi]

@@ -1230,7 +1230,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                terms, tscale, margin, simultaneous, max_events, X, S, EV, n_ev,
                counts, sched_t, sched_e, sched_k, sched_pos,
                om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT,
-               reach, per_state, Ksym, Wl, km, c0, kappa, rho_keys, rho_vals, TL, FL, MinvUL,
+               reach, per_state, Ksym, Wl, km, cb, kappa, rho_keys, rho_vals, TL, FL, MinvUL,
                GTL, HX, HNU, track, EP, PB, pbin, PC, PM, PN, t_call, sptr, sidx, sval, sk,
                sc, chp, TCH, TCW, TS, TP, ntp, k_org, carry, MKC_in, acc_in, t_span):
     """Propagate output steps ``k0 .. n_steps - 1`` from state ``x`` in contact state ``s``.
@@ -1421,7 +1421,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     else:
         _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
         if per_state:
-            rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
+            rs = _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, rho_keys, rho_vals)
             h_max = reach / rs if rs > 0.0 else h_all
             tscale = TERM_BINS * rs / reach
     k = k0
@@ -1730,7 +1730,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 dense = False
                 survived += 1
                 if pending and survived >= LAZY:  # a lasting state: its own bound from now on
-                    rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals)
+                    rs = _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, rho_keys, rho_vals)
                     h_max = reach / rs if rs > 0.0 else h_all
                     tscale = TERM_BINS * rs / reach
                     pending = False
@@ -1814,7 +1814,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 # over every state until one of its pieces ends without an event (most states
                 # of a rattle or a double-contact transient live shorter than a piece: their
                 # eigenproblem would cost more than the longer pieces save)
-                rs = _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, rho_keys, rho_vals,
+                rs = _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, rho_keys, rho_vals,
                                 False)
                 pending = rs < 0.0
                 survived = 0
@@ -1916,7 +1916,10 @@ class StateBound:
     its own fastest mode allows, not the stiffest state's).
 
     For a state ``s`` the bound is taken as for all states (:func:`spectral_bound_all`) but
-    with only ``s``'s contacts closed, at the azimuth 0 of the geometry, and times
+    with only ``s``'s contacts closed, at the azimuth 0 of the geometry: its stiffness part an
+    eigenproblem, its damping part ``min(c_all, |L^-1 C0 L^-T| + sum_(e in s) |c_e|
+    |L^-1 w_e|^2)`` (the triangle inequality over the closed contacts only: contacts that
+    never close, such as back flanks, no longer count), and times
     ``kappa = rho_all / rho_all(0)``: the ratio of the run's bound over every state (with its
     margins over the azimuth, the speed re-basing and the turning harmonics) to the same
     all-states formula at azimuth 0. So ``rho_s <= rho_all`` always, and ``rho_s`` carries the
@@ -1947,6 +1950,11 @@ class StateBound:
         A = Li @ K @ Li.T
         self.Ksym = np.ascontiguousarray(0.5 * (A + A.T))
         self.Wl = np.ascontiguousarray(np.asarray(f["W"], dtype=float) @ Li.T)
+        # the damping part per state: [c_all, |L^-1 C0 L^-T|_2, |c_e| |L^-1 w_e|^2 ...]
+        c_free = float(np.linalg.norm(Li @ np.asarray(f["C0"], dtype=float) @ Li.T, 2))
+        c_e = np.abs(np.asarray(system.c, dtype=float)) * np.einsum("ij,ij->i", self.Wl,
+                                                                    self.Wl)
+        self.cb = np.ascontiguousarray(np.concatenate([[self.c0, c_free], c_e]))
         self.km = np.ascontiguousarray(np.asarray(shim.k_max, dtype=float))
         # an open-addressing table of the states met: keys (bit masks, -1 free), bounds
         self.keys = np.full(STATE_TABLE, -1, dtype=np.int64)
@@ -1973,15 +1981,15 @@ class StateBound:
         """The kernel's arguments (a disabled bound: empty arrays, every state at rho_all)."""
         if not self.enabled:
             z = np.zeros((0, 0))
-            return (False, z, z, np.zeros(0), 0.0, 1.0, self.keys, self.vals)
-        return (True, self.Ksym, self.Wl, self.km, self.c0, self.kappa, self.keys, self.vals)
+            return (False, z, z, np.zeros(0), np.zeros(1), 1.0, self.keys, self.vals)
+        return (True, self.Ksym, self.Wl, self.km, self.cb, self.kappa, self.keys, self.vals)
 
 
 @numba.njit(cache=True)
-def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, keys, vals, compute=True):
+def _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, keys, vals, compute=True):
     """The bound of contact state ``s`` (:class:`StateBound`), from the table ``keys``,
     ``vals`` (linear probing) or computed and stored there; with ``compute`` false, -1 when
-    the state is not in the table yet."""
+    the state is not in the table yet. ``cb``: the damping parts (:attr:`StateBound.cb`)."""
     key = np.int64(0)
     for e in range(s.shape[0]):
         if s[e]:
@@ -2010,6 +2018,12 @@ def _state_rho(s, Ksym, Wl, km, c0, kappa, rho_all, keys, vals, compute=True):
                         H[i, j] += wi * Wl[e, j]
     lam = np.linalg.eigvalsh(H)
     kk = max(abs(lam[0]), abs(lam[n - 1]))
+    c0 = cb[0]
+    cs = cb[1]
+    for e in range(s.shape[0]):
+        if s[e]:
+            cs += cb[2 + e]
+    c0 = min(c0, cs)
     r = min(rho_all, kappa * 0.5 * (c0 + math.sqrt(c0 * c0 + 4.0 * kk)))
     if slot >= 0:
         keys[slot] = key
