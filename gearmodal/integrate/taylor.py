@@ -186,7 +186,8 @@ def _coefficients_frozen(MKC, g0, g1, q, v, h, B, y, HF, harmonic):
 
 @numba.njit(cache=True, fastmath=True)
 def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC, Y, Yd, Bt,
-                  TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads, HF, harmonic):
+                  TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads, HF, harmonic,
+                  zsrc):
     """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions: the frozen part by (T1) with
     the forcing terms ``g0`` (the force at the piece's start) and ``g1`` (its rate), one
     contiguous product per term with ``MKC = [M^-1 K_s, M^-1 C_s, Z]`` (``y``: scratch of its
@@ -206,7 +207,8 @@ def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC
     turning loads ``M^-1 Z_h u`` at the piece's start and their rates. ``Y``, ``Yd`` hold
     real and imaginary parts in their first axis (2, H1, n_terms, nT) and ``Bt`` (n_terms, nT)
     the turning coordinates' rows of ``B``: real, contiguous sums that vectorise. ``HF`` as
-    :func:`_coefficients_frozen` (the harmonic loads, their turning products included)."""
+    :func:`_coefficients_frozen` (the harmonic loads, their turning products included).
+    ``zsrc``: the Z columns ``MKC`` keeps, by their place in the full layout (taylor_run)."""
     n_terms, n = B.shape
     n2 = n - n % 2
     width = MKC.shape[1]  # 2 n, or more with the turning columns
@@ -286,6 +288,9 @@ def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC
                     y[o + c] = cd * Yd[0, hh, k, c]
                     y[o + nT + c] = cd * Yd[1, hh, k, c]
                 o += 2 * nT
+        if zsrc.shape[0] < o - 2 * n:  # the kept Z columns, in place (zsrc[j] >= j)
+            for j in range(zsrc.shape[0]):
+                y[2 * n + j] = y[2 * n + zsrc[j]]
         # the frozen part of (T1): B[k + 2] = MKC [c2 B[k]; c1 B[k + 1]; y_Z], written out
         # here (a helper, inlined or called, takes and drops an atomic reference count on
         # each of its arrays per term: 12 % of an event-dense run)
@@ -1326,6 +1331,26 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     MKC[i, o + c] = ZC[hh, i, c].real
                     MKC[i, o + nT + c] = -ZC[hh, i, c].imag
             o += 2 * nT
+    # Z columns zero in every row are dropped from the product (a harmonic touches only its
+    # own frame's coordinates: two turning carriers share few); ``zsrc`` maps the kept ones
+    # to their place in the full layout, where _coefficients writes them first
+    nzk = 0
+    zsrc = np.empty(nz, dtype=np.int64)
+    for jz in range(nz):
+        for i in range(n):
+            if MKC[i, 2 * n + jz] != 0.0:
+                zsrc[nzk] = jz
+                nzk += 1
+                break
+    if nzk < nz:
+        MKCc = np.empty((n, 2 * n + nzk))
+        for i in range(n):
+            for j in range(2 * n):
+                MKCc[i, j] = MKC[i, j]
+            for j in range(nzk):
+                MKCc[i, 2 * n + j] = MKC[i, 2 * n + zsrc[j]]
+        MKC = MKCc
+    zsrc = zsrc[:nzk]
     acc = np.empty(n)
     carried = (carry.shape[0] >= 7 and carry[0] > 0.0 and MKC_in.shape[0] == n
                and MKC_in.shape[1] == MKC.shape[1] and acc_in.shape[0] == n)
@@ -1583,7 +1608,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     turning_loads = loads or loads_knots
                     _coefficients(MKC, g0, gR, q, v, h, Bv, ysc, E, EL, tcols, krows, urows, ZK,
                                   ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, VST,
-                                  cturn, turning_loads, HF, harmonic)
+                                  cturn, turning_loads, HF, harmonic, zsrc)
                 else:
                     _coefficients_frozen(MKC, g0, gR, q, v, h, Bv, ysc, HF, harmonic)
                 if _converged(Bv, TAIL):
