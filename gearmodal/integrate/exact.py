@@ -65,11 +65,16 @@ class ExactIntegrator:
     """
 
     def __init__(self, system: PiecewiseLinearSystem, dt: float, max_events_per_step: int = 200):
-        self.sys = system
+        self._sys = weakref.ref(system)  # weakly, as TaylorIntegrator's
         self.dt = float(dt)
         self.prop = Propagators(system, dt)
         self.max_events = int(max_events_per_step)
         self.n = system.n
+
+    @property
+    def sys(self) -> PiecewiseLinearSystem:
+        """The system (held weakly)."""
+        return self._sys()
 
     def stacks(self, s):
         """Per-state arrays for the numba kernel: propagators of dyadic levels 0..J (filled

@@ -428,8 +428,13 @@ class Propagators:
     """Per contact state: ``A_s``, ``f_s``, a bound of the spectral radius
     (:meth:`PiecewiseLinearSystem.spectral_bound`) and dyadic step propagators."""
 
+    @property
+    def system(self) -> PiecewiseLinearSystem:
+        """The system (held weakly)."""
+        return self._system()
+
     def __init__(self, system: PiecewiseLinearSystem, dt: float):
-        self.system = system
+        self._system = weakref.ref(system)  # weakly: see TaylorIntegrator
         self.dt = float(dt)
         self._states: dict[bytes, dict] = {}
         self.n_exponentials = 0

@@ -35,6 +35,7 @@ from __future__ import annotations
 import functools
 import math
 import types
+import weakref
 
 import numba
 import numpy as np
@@ -2084,9 +2085,17 @@ class TaylorIntegrator:
     """Per frozen system: the arrays of :func:`taylor_run` (built once, reused by callers that
     advance one system in several calls)."""
 
+    @property
+    def sys(self):
+        """The system (held weakly: ``__init__``)."""
+        return self._sys()
+
     def __init__(self, system, dt: float, max_events_per_step: int = 200,
                  reach: float = REACH, n_terms: int | None = None):
-        self.sys = system
+        # weakly: the exact method's registry keeps an integrator as long as its system
+        # lives, so the integrator must not keep the system alive (a long turbine run makes a
+        # system per re-basing)
+        self._sys = weakref.ref(system)
         self.dt = float(dt)
         self.max_events = int(max_events_per_step)
         self._basis_maps = None  # _loads: (basis, its rows, M^-1 rows, turning rows)
