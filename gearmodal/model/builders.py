@@ -386,6 +386,20 @@ def _operating_angle(field: str, a: float, rb_sum: float, pair: str) -> float:
     return math.acos(c)
 
 
+def _centre(name: str, centre_distance, a: Gear, b: Gear, pairs: dict) -> tuple[float, dict]:
+    """The centre distance of external gears ``a`` and ``b`` and each pair's operating
+    pressure angle (``pairs``: key -> (base radii's sum or difference, its label)): without
+    ``centre_distance`` the standard distance of unshifted gears and None (the gears' own
+    angle) for every pair."""
+    if centre_distance is None:
+        return ((a.base_radius + b.base_radius) / math.cos(a.transverse_pressure_angle),
+                dict.fromkeys(pairs))
+    field = f"{name}.centre_distance"
+    centre = v.positive(field, centre_distance, "m")
+    return centre, {key: _operating_angle(field, centre, rb, label)
+                    for key, (rb, label) in pairs.items()}
+
+
 def _needs_contact_ratio(field: str, spec: dict) -> None:
     """With a centre distance (profile-shifted gears) the default contact ratio, computed for
     standard gears, does not apply: an alternating mesh must state its own."""
@@ -485,16 +499,9 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
             raise ModelError(f"{name}.mesh_stiffness", "needs sun_planet and ring_planet")
     else:
         k_sp = k_rp = mesh_stiffness
-    alpha_w = dict.fromkeys(("sun_planet", "ring_planet"))  # None: the gears' own angle
-    if centre_distance is None:
-        centre = (s.base_radius + p.base_radius) / math.cos(s.transverse_pressure_angle)
-    else:
-        field = f"{name}.centre_distance"
-        centre = v.positive(field, centre_distance, "m")
-        alpha_w["sun_planet"] = _operating_angle(field, centre, s.base_radius + p.base_radius,
-                                                 "sun + planet")
-        alpha_w["ring_planet"] = _operating_angle(field, centre, r.base_radius - p.base_radius,
-                                                  "ring - planet")
+    centre, alpha_w = _centre(name, centre_distance, s, p, {
+        "sun_planet": (s.base_radius + p.base_radius, "sun + planet"),
+        "ring_planet": (r.base_radius - p.base_radius, "ring - planet")})
     _planets_fit(name, planet_angles is not None, psi, centre, p, s.teeth + r.teeth)
 
     m = Model(name, input="carrier")
@@ -579,13 +586,10 @@ def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash:
     angle = v.number(f"{name}.angle", angle, "rad")
     x0, y0 = (v.number(f"{name}.position", c, "m") for c in position)
     alt = _alternation(f"{name}.mesh_alternation", mesh_alternation)
-    if centre_distance is None:
-        centre = (g.base_radius + p.base_radius) / math.cos(g.transverse_pressure_angle)
-    else:
-        field = f"{name}.centre_distance"
-        centre = v.positive(field, centre_distance, "m")
-        alt["pressure_angle"] = _operating_angle(field, centre, g.base_radius + p.base_radius,
-                                                 "gear + pinion")
+    centre, alpha_w = _centre(name, centre_distance, g, p, {
+        "mesh": (g.base_radius + p.base_radius, "gear + pinion")})
+    if centre_distance is not None:
+        alt["pressure_angle"] = alpha_w["mesh"]
         _needs_contact_ratio(f"{name}.mesh_alternation", alt)
     g.position, g.speed_ratio, g.role, p.role = (x0, y0, 0.0), 1.0, "gear", "pinion"
     p.position = (x0 + centre * math.cos(angle), y0 + centre * math.sin(angle), 0.0)
