@@ -120,6 +120,7 @@ class Rosco:
         runtime = sorted(p.name for p in (self._dir / "rosco.libs").glob("libgfortran*"))
         self._flush = ctypes.CDLL(runtime[0])._gfortran_flush_i4 if runtime else None
         self.log = self._dir / "rosco.log"  # what the controller printed
+        self._log = None  # its file, open while the controller lives (opened at the 1st call)
         self._lib.DISCON.argtypes = [ctypes.POINTER(ctypes.c_float),
                                      ctypes.POINTER(ctypes.c_int32), ctypes.c_char_p,
                                      ctypes.c_char_p, ctypes.c_char_p]
@@ -176,11 +177,12 @@ class Rosco:
                 self._lib.DISCON(*args)
                 return
             try:
-                with open(self.log, "ab") as log:
-                    os.dup2(log.fileno(), 1)
-                    self._lib.DISCON(*args)
-                    if self._flush is not None:
-                        self._flush(ctypes.byref(ctypes.c_int32(6)))
+                if self._log is None:
+                    self._log = open(self.log, "ab")  # noqa: SIM115 (closed in close())
+                os.dup2(self._log.fileno(), 1)
+                self._lib.DISCON(*args)
+                if self._flush is not None:
+                    self._flush(ctypes.byref(ctypes.c_int32(6)))
             finally:
                 os.dup2(saved, 1)
                 os.close(saved)
@@ -197,6 +199,9 @@ class Rosco:
             except SolveError:
                 pass
         self._lib = None
+        if self._log is not None:
+            self._log.close()
+            self._log = None
         shutil.rmtree(self._dir, ignore_errors=True)
 
     def __enter__(self) -> Rosco:
