@@ -60,3 +60,21 @@ def paired_ratio(a, b, level: float = 0.95) -> dict:
             k += 1
     return {"ratio": math.exp(mean), "low": math.exp(mean - half), "high": math.exp(mean + half),
             "n": n, "differs": bool(mean - half > 0 or mean + half < 0), "seeds_needed": need}
+
+
+def paired_effects(runs, effects, level: float = 0.95):
+    """Each effect over the seeds both variants ran: ``runs`` a table with columns ``case``,
+    ``seed`` and the quantities; ``effects`` ``[(variant, against, [quantity, ...]), ...]``.
+    Returns a DataFrame, one row per effect and quantity: ``effect`` ("variant / against"),
+    ``quantity`` and :func:`paired_ratio`'s columns."""
+    import pandas as pd
+
+    rows = []
+    for var, base, quantities in effects:
+        a = runs[runs.case == var].set_index("seed").sort_index()
+        b = runs[runs.case == base].set_index("seed").sort_index()
+        seeds = a.index.intersection(b.index)
+        for q in quantities:
+            r = paired_ratio(a.loc[seeds, q], b.loc[seeds, q], level)
+            rows.append({"effect": f"{var} / {base}", "quantity": q, **r})
+    return pd.DataFrame(rows)

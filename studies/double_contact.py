@@ -70,17 +70,9 @@ def metrics():
 def effects(runs: pd.DataFrame, level: float = 0.95) -> pd.DataFrame:
     """Each effect of :data:`EFFECTS` as a paired ratio over the seeds (gearmodal.paired,
     (C1), (C2)): one row per variant, reference and quantity."""
-    from gearmodal.paired import paired_ratio
+    from gearmodal.paired import paired_effects
 
-    rows = []
-    for var, base, quantities in EFFECTS:
-        a = runs[runs.case == var].set_index("seed").sort_index()
-        b = runs[runs.case == base].set_index("seed").sort_index()
-        seeds = a.index.intersection(b.index)
-        for q in quantities:
-            r = paired_ratio(a.loc[seeds, q], b.loc[seeds, q], level)
-            rows.append({"effect": f"{var} / {base}", "quantity": q, **r})
-    return pd.DataFrame(rows)
+    return paired_effects(runs, EFFECTS, level)
 
 
 def _nrel5mw():

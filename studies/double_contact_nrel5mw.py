@@ -28,7 +28,7 @@ import pandas as pd
 
 import gearmodal as gm
 from gearmodal.massscale import STUDY_TOP_FREQUENCY_HZ
-from gearmodal.paired import paired_ratio
+from gearmodal.paired import paired_effects
 from gearmodal.report import write_study_report
 from gearmodal.summary import summarize
 from gearmodal.turbine import nrel5mw
@@ -69,15 +69,8 @@ def _row(result: dict) -> dict:
 def effects(runs: pd.DataFrame, level: float = 0.95) -> pd.DataFrame:
     """Each fault case against the reference, per quantity, as a paired ratio over the seeds
     (gearmodal.paired, (C1))."""
-    rows = []
-    base = runs[runs.case == "reference"].set_index("seed").sort_index()
-    for var in ("clearance", "clearance_3point"):
-        a = runs[runs.case == var].set_index("seed").sort_index()
-        seeds = a.index.intersection(base.index)
-        for q in QUANTITIES:
-            r = paired_ratio(a.loc[seeds, q], base.loc[seeds, q], level)
-            rows.append({"effect": f"{var} / reference", "quantity": q, **r})
-    return pd.DataFrame(rows)
+    return paired_effects(runs, [(var, "reference", QUANTITIES)
+                                 for var in ("clearance", "clearance_3point")], level)
 
 
 def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int = 3,
