@@ -338,6 +338,7 @@ class Stepper:
         self.outputs = list(outputs)
         # the force rows cost a mesh stiffness and a force map per call: only when asked for
         self._forces = any(name in self.fmap.labels for name in self.outputs)
+        self._qv_names = self.output_names[:2 * len(asm.dof_names)]  # q, then velocities
         self._force_rebase = False  # set_speed_torque: re-base at the next call's start
         self._reserved = None  # reserve(): the output steps held
         self._cpu = time.process_time() - cpu
@@ -475,18 +476,16 @@ class Stepper:
         # rotations absolute: the reference rotation at each wheel's ratio added
         q = q[0] + self.ratio * self.ref.at(self.time)
         qd = qd[0] + self.ratio * self.ref.om_f
-        out = dict(zip(self.asm.dof_names, q, strict=True))
-        out.update({f"{d}.velocity": val for d, val in zip(self.asm.dof_names, qd,
-                                                            strict=True)})
+        out = dict(zip(self._qv_names, np.concatenate([q, qd]).tolist(), strict=True))
         t = self.time
         if self._forces:
             K = mesh_stiffness(self.system, np.array([self.ref.at(t)]))
             f = self.fmap.rows(self.system, x[None, :], self.run.s[None, :],
                                np.array([t - self.ref.t_f]), K)
-            out.update(zip(self.fmap.labels, f[0], strict=True))
+            out.update(zip(self.fmap.labels, f[0].tolist(), strict=True))
         if self.drive is not None:
-            out["drive.torque"] = self._drive_torque()
-        return {name: float(out[name]) for name in self.outputs}
+            out["drive.torque"] = float(self._drive_torque())
+        return {name: out[name] for name in self.outputs}
 
     @property
     def state(self) -> tuple[pd.Series, pd.Series]:

@@ -109,6 +109,7 @@ class TurbinePlant:
                              "turbine has no induction generator (Turbine.generator is None)")
         self.controller = controller
         self.pitch = float(controller.pitch) if controller is not None else turbine.rotor.pitch
+        self._hub = (np.zeros(1), np.full(1, float(turbine.hub_height)))  # the hub point
         self.t_gen = 0.0  # the controller's last torque demand, N m
         self.on = bool(connected) or controller is not None
         self.cut_in = 0.0 if self.on else None
@@ -162,7 +163,7 @@ class TurbinePlant:
         turbine = self.turbine
         w_gen = self.sg * generator_speed  # forward positive
         if self.controller is not None:  # its demands from the measured speeds
-            hub = self.wind.velocity(t, np.zeros(1), np.full(1, turbine.hub_height))[0][0]
+            hub = self.wind.velocity(t, *self._hub)[0][0]
             self.t_gen, self.pitch = self.controller.step(t, w_gen, speed, self.pitch,
                                                           self.t_gen, float(hub))
         # aerodynamics at the rotor's actual azimuth and speed ("interpolate": also at the

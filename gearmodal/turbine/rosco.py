@@ -130,6 +130,8 @@ class Rosco:
         self._msg = ctypes.create_string_buffer(1000)
         self._fail = ctypes.c_int32(0)
         self.swap = np.zeros(SWAP_SIZE, dtype=np.float32)
+        self._args = (self.swap.ctypes.data_as(ctypes.POINTER(ctypes.c_float)),  # fixed
+                      ctypes.byref(self._fail), self._infile, self._outname, self._msg)
         s = self.swap
         s[2] = self.dt
         s[60] = blades
@@ -166,8 +168,7 @@ class Rosco:
         controllers in several threads take turns (and nothing else printed during a call
         reaches the terminal); with no standard output to redirect, the call is made as
         is."""
-        args = (self.swap.ctypes.data_as(ctypes.POINTER(ctypes.c_float)),
-                ctypes.byref(self._fail), self._infile, self._outname, self._msg)
+        args = self._args
         with _STDOUT:
             if sys.stdout is not None:
                 sys.stdout.flush()

@@ -115,14 +115,22 @@ class Rotor:
         """Pickle without the induction factors of the last call (a warm start that every run
         resets), so that a pickled (or fingerprinted) rotor is the same before and after a
         run."""
-        return {**self.__dict__, "_a": np.zeros_like(self._a), "_ap": np.zeros_like(self._ap)}
+        state = {**self.__dict__, "_a": np.zeros_like(self._a), "_ap": np.zeros_like(self._ap)}
+        state.pop("_pos", None)
+        return state
 
     def positions(self, psi: float):
         """Element positions ``(y, z)`` relative to the hub, each (blades, n), and the
-        blade azimuths."""
+        blade azimuths (read-only: the last azimuth's are kept, asked for twice a step)."""
+        last = self.__dict__.get("_pos")
+        if last is not None and last[0] == psi:
+            return last[1]
         psib = psi + 2 * math.pi * np.arange(self.blades) / self.blades
         y = -np.sin(psib)[:, None] * self.r[None, :]
         z = np.cos(psib)[:, None] * self.r[None, :]
+        for a in (y, z, psib):
+            a.flags.writeable = False
+        self._pos = (psi, (y, z, psib))
         return y, z, psib
 
     def loads(self, omega: float, psi: float, wind_u: np.ndarray, wind_vt: np.ndarray,

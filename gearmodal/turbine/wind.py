@@ -296,9 +296,12 @@ class Wind:
         points ``(y, z)`` (m; ``z`` above ground), including shear and tower shadow."""
         y = np.asarray(y, dtype=float)
         z = np.asarray(z, dtype=float)
-        shape = np.broadcast_shapes(y.shape, z.shape)
-        yf = np.ascontiguousarray(np.broadcast_to(y, shape)).ravel()
-        zf = np.ascontiguousarray(np.broadcast_to(z, shape)).ravel()
+        if y.shape == z.shape:  # (the rotor's points every aerodynamic step)
+            shape, yf, zf = y.shape, y.ravel(), z.ravel()
+        else:
+            shape = np.broadcast_shapes(y.shape, z.shape)
+            yf = np.ascontiguousarray(np.broadcast_to(y, shape)).ravel()
+            zf = np.ascontiguousarray(np.broadcast_to(z, shape)).ravel()
         if self.turbulent:
             tt, gy, gz, box = self._turbulence()
             if t > tt[-1] + 1e-9:
