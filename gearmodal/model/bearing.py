@@ -4,6 +4,7 @@ relative rotation."""
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -16,6 +17,7 @@ from ..kernels.joint import bearing_gap_jacobians, joint_gradients
 from . import validate as v
 from .clearance import MAX_RAMPS, polygon_ramps
 from .components import DIRECTIONS, GROUND, check_structure
+from .element import Element
 from .schema import NAME, REQUIRED, STRUCTURE, Field, Table
 
 __all__ = ["CLEARANCE_SHAPES", "MAX_FACETS", "Bearing", "Shaft"]
@@ -34,7 +36,7 @@ def _acts(w: np.ndarray) -> bool:
 
 
 @dataclass(eq=False)
-class Bearing:
+class Bearing(Element):
     """A spring-damper between body ``a`` and body ``b`` (or ground), per direction (DESIGN 2.3).
 
     ``stiffness``, ``damping`` and ``clearance`` are dicts keyed by direction ``x, y, z`` (N/m,
@@ -125,6 +127,27 @@ class Bearing:
                 raise ModelError(f"{f}.clearance.x", "missing: a "
                                  f"{self.clearance_shape} clearance needs a radial clearance "
                                  "> 0 m in x and y")
+
+    # -- in a model ---------------------------------------------------------------------
+    def references(self) -> list[tuple[str, str, str]]:
+        out = [("a", self.a, "bodies")]
+        if self.b is not None:
+            out.append(("b", self.b, "bodies"))
+        if self.axes_frame is not None:
+            out.append(("axes_frame", self.axes_frame, "frames"))
+        return out
+
+    def renamed(self, p, prefix: str, ground: str | None = None) -> Bearing:
+        new = copy.copy(self)
+        new.name, new.a = p(self.name), p(self.a)
+        new.stage = p(self.stage) if self.stage else prefix
+        new.planet = p(self.planet) if self.planet else self.planet
+        new.b = p(self.b) if self.b is not None else ground
+        if self.axes_frame is not None and self.axes_frame != GROUND:
+            new.axes_frame = p(self.axes_frame)
+        new.stiffness, new.damping = dict(self.stiffness), dict(self.damping)
+        new.clearance = dict(self.clearance)
+        return new
 
     # -- its contribution to the assembly (DESIGN 2.3) --------------------------------------
     def _rows(self, ctx, azimuth: float):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -13,6 +14,7 @@ from ..frames import rz
 from ..kernels.mesh import mesh_gap_jacobian
 from . import validate as v
 from .components import Gear, check_structure
+from .element import Element
 from .mesh_stiffness import variation_of
 from .schema import NAME, REQUIRED, STRUCTURE, Field, Table
 
@@ -20,7 +22,7 @@ __all__ = ["Mesh"]
 
 
 @dataclass(eq=False)
-class Mesh:
+class Mesh(Element):
     """A gear mesh with two compression-only flanks and backlash (DESIGN 2.2).
 
     The front flank carries ``stiffness * d_f + damping * d_f'`` while ``d_f > 0``; the back
@@ -114,6 +116,32 @@ class Mesh:
         if self.pressure_angle is not None:
             self.pressure_angle = v.angle(f"{f}.pressure_angle", self.pressure_angle,
                                           low=1e-6, high=math.pi / 2)
+
+    # -- in a model ---------------------------------------------------------------------
+    def references(self) -> list[tuple[str, str, str]]:
+        return [("gear_a", self.gear_a, "bodies"), ("gear_b", self.gear_b, "bodies")]
+
+    def renamed(self, p, prefix: str, ground: str | None = None) -> Mesh:
+        new = copy.copy(self)
+        new.name, new.gear_a, new.gear_b = p(self.name), p(self.gear_a), p(self.gear_b)
+        new.stage = p(self.stage) if self.stage else prefix
+        new.planet = p(self.planet) if self.planet else self.planet
+        return new
+
+    def check_in(self, model) -> None:
+        """Its gears carry tooth data (or the mesh gives ``base_radii``), turn in frames at one
+        speed, and an internal gear is ``gear_a``."""
+        a, b = model.bodies[self.gear_a], model.bodies[self.gear_b]
+        for side, g in (("gear_a", a), ("gear_b", b)):
+            if self.base_radii is None and not isinstance(g, Gear):
+                raise ModelError(f"{self.name}.{side}", f"= {g.name!r} is not a Gear; give "
+                                 "base_radii and pressure_angle on the mesh")
+        if model.frames[a.frame].speed_ratio != model.frames[b.frame].speed_ratio:
+            raise ModelError(f"{self.name}", f"gears {a.name!r} and {b.name!r} sit in frames "
+                             "turning at different speeds; put both in one frame")
+        if isinstance(b, Gear) and b.internal:
+            raise ModelError(f"{self.name}.gear_b", f"= {b.name!r} is internal; the internal "
+                             "gear (ring) must be gear_a")
 
     # -- its contribution to the assembly (DESIGN 2.2) --------------------------------------
     def contribute(self, ctx) -> None:

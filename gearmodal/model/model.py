@@ -13,7 +13,8 @@ import math
 from ..errors import ModelError
 from . import validate as v
 from .bearing import Bearing
-from .components import DOF_LEVELS, GRAVITY, GROUND, LEVEL_INDICES, Body, Frame, Gear
+from .components import DOF_LEVELS, GRAVITY, GROUND, LEVEL_INDICES, Body, Frame
+from .element import PROTOCOL, Element
 from .mesh import Mesh
 
 #: the element kinds a model holds, in assembly order: each class adds its own rows
@@ -30,11 +31,17 @@ def register_element(cls: type) -> type:
     The class needs ``name``, ``TABLE`` (a new name), ``SCHEMA``
     (:class:`~gearmodal.model.schema.Table`) and ``contribute(ctx)``
     (:class:`gearmodal.assembly.Contributions`); its fields of schema type ``name`` (other than
-    ``name``) are body names, prefixed with the rest when a drivetrain merges a stage.
+    ``name``) are body names, prefixed with the rest when a drivetrain merges a stage. What the
+    model asks of it (``references``, ``renamed``, ``check_in``:
+    :class:`gearmodal.model.element.Element`) comes from its ``SCHEMA`` unless it defines its
+    own (or derives from ``Element`` and overrides them).
     """
     for attr in ("TABLE", "SCHEMA", "contribute"):
         if not hasattr(cls, attr):
             raise TypeError(f"an element kind needs {attr}; {cls.__name__} has none")
+    for attr in PROTOCOL:  # what the model asks of every kind, from its SCHEMA by default
+        if not hasattr(cls, attr):
+            setattr(cls, attr, getattr(Element, attr))
     taken = {c.TABLE for c in ELEMENT_KINDS} | {"frames", "bodies", "groups", "model"}
     if cls not in ELEMENT_KINDS:
         if cls.TABLE in taken:
@@ -138,32 +145,11 @@ class Model:
             if b.pinned_to is not None:
                 nb.pinned_to = p(b.pinned_to)
             self.bodies[self._free(nb.name)] = nb
-        for m in other.meshes.values():
-            nm = copy.copy(m)
-            nm.name, nm.gear_a, nm.gear_b = p(m.name), p(m.gear_a), p(m.gear_b)
-            nm.stage, nm.planet = stage(m), p(m.planet) if m.planet else m.planet
-            self.meshes[self._free(nm.name)] = nm
-        for br in other.bearings.values():
-            nb = copy.copy(br)
-            nb.name, nb.a = p(br.name), p(br.a)
-            nb.stage, nb.planet = stage(br), p(br.planet) if br.planet else br.planet
-            nb.b = p(br.b) if br.b is not None else ground
-            if br.axes_frame is not None and br.axes_frame != GROUND:
-                nb.axes_frame = p(br.axes_frame)
-            nb.stiffness, nb.damping = dict(br.stiffness), dict(br.damping)
-            nb.clearance = dict(br.clearance)
-            self.bearings[self._free(nb.name)] = nb
-        for cls in ELEMENT_KINDS:
-            if cls in (Mesh, Bearing):
-                continue
-            for e in other.elements_of(cls).values():  # a registered kind: prefix its names
-                ne = copy.copy(e)
-                for f in cls.SCHEMA.fields:
-                    if f.type == "name" and getattr(e, f.key, None):
-                        setattr(ne, f.key, p(getattr(e, f.key)))
-                if hasattr(ne, "stage"):
-                    ne.stage = stage(e)
-                self.elements_of(cls)[self._free(ne.name)] = ne
+        for cls in ELEMENT_KINDS:  # each kind renames its own (element.Element.renamed)
+            table = self.elements_of(cls)
+            for e in other.elements_of(cls).values():
+                ne = e.renamed(p, prefix, ground)
+                table[self._free(ne.name)] = ne
         for g, members in other.groups.items():
             self.groups[p(g)] = [p(m) for m in members]
         return self
@@ -225,37 +211,13 @@ class Model:
                     raise ModelError(f"{b.name}.pinned_to", f"= {b.pinned_to!r}: must name "
                                      f"another body in frame {b.frame!r} that is not itself "
                                      "pinned")
-        for m in self.meshes.values():
-            for side in ("gear_a", "gear_b"):
-                ref = getattr(m, side)
-                if ref not in self.bodies:
-                    raise ModelError(f"{m.name}.{side}", f"= {ref!r}: no such body")
-                if m.base_radii is None and not isinstance(self.bodies[ref], Gear):
-                    raise ModelError(f"{m.name}.{side}", f"= {ref!r} is not a Gear; give "
-                                     "base_radii and pressure_angle on the mesh")
-            a, b = self.bodies[m.gear_a], self.bodies[m.gear_b]
-            fa, fb = self.frames[a.frame], self.frames[b.frame]
-            if fa.speed_ratio != fb.speed_ratio:
-                raise ModelError(f"{m.name}", f"gears {a.name!r} and {b.name!r} sit in frames "
-                                 "turning at different speeds; put both in one frame")
-            if isinstance(b, Gear) and b.internal:
-                raise ModelError(f"{m.name}.gear_b", f"= {b.name!r} is internal; the internal "
-                                 "gear (ring) must be gear_a")
-        for br in self.bearings.values():
-            if br.a not in self.bodies:
-                raise ModelError(f"{br.name}.a", f"= {br.a!r}: no such body")
-            if br.b is not None and br.b not in self.bodies:
-                raise ModelError(f"{br.name}.b", f"= {br.b!r}: no such body")
-            if br.axes_frame is not None and br.axes_frame not in self.frames:
-                raise ModelError(f"{br.name}.axes_frame", f"= {br.axes_frame!r}: no such frame")
-        for cls in ELEMENT_KINDS:
-            if cls in (Mesh, Bearing):
-                continue
-            for e in self.elements_of(cls).values():  # a registered kind: its body names
-                for f in cls.SCHEMA.fields:
-                    ref = getattr(e, f.key, None)
-                    if f.type == "name" and f.key != "name" and ref and ref not in self.bodies:
-                        raise ModelError(f"{e.name}.{f.key}", f"= {ref!r}: no such body")
+        tables = {"bodies": (self.bodies, "body"), "frames": (self.frames, "frame")}
+        for e in self.elements():  # each kind names what it refers to and checks the rest
+            for key, ref, where in e.references():
+                table, what = tables[where]
+                if ref not in table:
+                    raise ModelError(f"{e.name}.{key}", f"= {ref!r}: no such {what}")
+            e.check_in(self)
         return self
 
     def set_dofs(self, level: str, bodies=None) -> Model:
