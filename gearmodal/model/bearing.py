@@ -26,7 +26,6 @@ __all__ = ["CLEARANCE_SHAPES", "MAX_FACETS", "Bearing", "Shaft"]
 CLEARANCE_SHAPES = ("axes", "polygon", "round")
 MAX_FACETS = 720
 #: the plausibility limits (validate.LIMITS) of a bearing's tables
-_KIND = {"stiffness": "stiffness", "damping": "damping", "clearance": "gap"}
 
 
 def _acts(w: np.ndarray) -> bool:
@@ -85,37 +84,16 @@ class Bearing(Element):
         f = self.name
         v.name("Bearing.name", self.name)
         check_structure(self)
-        for label, d, unit in (("stiffness", self.stiffness, "N/m or N m/rad"),
-                               ("damping", self.damping, "N s/m or N m s/rad"),
-                               ("clearance", self.clearance, "m or rad")):
-            if not isinstance(d, dict):
-                raise ModelError(f"{f}.{label}", f"expected a table keyed by direction "
-                                                 f"({', '.join(DIRECTIONS)}), got {d!r}")
-            for key in list(d):
-                if key not in DIRECTIONS:
-                    raise ModelError(f"{f}.{label}.{key}", "unknown direction; allowed: "
-                                     + ", ".join(DIRECTIONS))
-                d[key] = v.plausible(f"{f}.{label}.{key}", v.nonnegative(
-                    f"{f}.{label}.{key}", d[key], unit), _KIND[label])
+        # types and ranges: the schema's (one statement for the file and the API)
+        Bearing.SCHEMA.check(self, ("a", "b", "stiffness", "damping", "clearance", "at",
+                                    "axes_angle", "axes_frame", "clearance_shape", "facets",
+                                    "ramps"))
         for key in list(self.damping) + list(self.clearance):
             if key not in self.stiffness:
                 raise ModelError(f"{f}.stiffness.{key}", "missing: damping or clearance is "
                                  f"given for direction {key!r} but no stiffness")
-        at = tuple(self.at)
-        if len(at) == 2:
-            at = (*at, 0.0)
-        if len(at) != 3:
-            raise ModelError(f"{f}.at", f"= {self.at!r}: expected (x, y, z) in m")
-        self.at = tuple(v.plausible(f"{f}.at", v.number(f"{f}.at", p, "m"), "length")
-                        for p in at)
-        self.axes_angle = v.number(f"{f}.axes_angle", self.axes_angle, "rad")
-        v.choice(f"{f}.clearance_shape", self.clearance_shape, CLEARANCE_SHAPES)
-        self.facets = v.integer(f"{f}.facets", self.facets, minimum=3)
-        if self.facets > MAX_FACETS:
-            raise ModelError(f"{f}.facets", f"= {self.facets}: must be <= {MAX_FACETS}")
-        self.ramps = v.integer(f"{f}.ramps", self.ramps, minimum=1)
-        if self.ramps > MAX_RAMPS:
-            raise ModelError(f"{f}.ramps", f"= {self.ramps}: must be <= {MAX_RAMPS}")
+        if len(self.at) == 2:
+            self.at = (*self.at, 0.0)
         if self.clearance_shape != "axes":
             for label, d in (("clearance", self.clearance), ("stiffness", self.stiffness),
                              ("damping", self.damping)):

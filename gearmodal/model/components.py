@@ -139,44 +139,21 @@ class Body:
         f = self._label()
         if self.name:
             v.name(f"{type(self).__name__}.name", self.name)
-        self.mass = v.plausible(f"{f}.mass", v.positive(f"{f}.mass", self.mass, "kg"), "mass")
-        self.inertia = v.plausible(f"{f}.inertia", v.positive(f"{f}.inertia", self.inertia,
-                                                              "kg m^2"), "inertia")
+        schema = type(self).SCHEMA  # types and ranges: the one statement of them
+        schema.check(self, ("mass", "inertia"), f)
         if self.inertia_diametral is None:
             self.inertia_diametral = self.inertia / 2.0
-        self.inertia_diametral = v.plausible(f"{f}.inertia_diametral", v.positive(
-            f"{f}.inertia_diametral", self.inertia_diametral, "kg m^2"), "inertia")
-        v.choice(f"{f}.dofs", self.dofs, DOF_LEVELS)
-        err = tuple(self.position_error) if isinstance(self.position_error, (list, tuple)) \
-            else None
-        if err is None or len(err) != 2:
-            raise ModelError(f"{f}.position_error", f"= {self.position_error!r}: expected "
-                             "[x, y] in m (local axes: radial, tangential for a planet)")
-        self.position_error = tuple(v.plausible(f"{f}.position_error", v.number(
-            f"{f}.position_error", e, "m"), "gap") for e in err)
-        self.thickness_error = v.plausible(f"{f}.thickness_error", v.number(
-            f"{f}.thickness_error", self.thickness_error, "m"), "gap")
+        schema.check(self, ("inertia_diametral", "dofs", "position_error", "thickness_error",
+                            "frame", "position", "orientation", "speed_ratio",
+                            "rotation_scale", "pinned_to"), f)
         ro = tuple(self.runout) if isinstance(self.runout, (list, tuple)) else None
-        if ro is None or len(ro) != 2:
+        if ro is None or len(ro) != 2:  # (eccentricity >= 0, phase): a range per entry
             raise ModelError(f"{f}.runout", f"= {self.runout!r}: expected [eccentricity_m, "
                              "phase_rad]")
         self.runout = (v.plausible(f"{f}.runout", v.nonnegative(f"{f}.runout", ro[0], "m"),
                                    "gap"), v.number(f"{f}.runout", ro[1], "rad"))
-        if not isinstance(self.frame, str):
-            raise ModelError(f"{f}.frame", f"expected a frame name, got {self.frame!r}")
-        pos = tuple(self.position)
-        if len(pos) == 2:
-            pos = (*pos, 0.0)
-        if len(pos) != 3:
-            raise ModelError(f"{f}.position", f"= {self.position!r}: expected (x, y, z) in m")
-        self.position = tuple(v.plausible(f"{f}.position", v.number(f"{f}.position", p, "m"),
-                                          "length") for p in pos)
-        self.orientation = v.number(f"{f}.orientation", self.orientation, "rad")
-        self.speed_ratio = v.number(f"{f}.speed_ratio", self.speed_ratio)
-        if self.rotation_scale is not None:
-            self.rotation_scale = v.positive(f"{f}.rotation_scale", self.rotation_scale, "m")
-        if self.pinned_to is not None and not isinstance(self.pinned_to, str):
-            raise ModelError(f"{f}.pinned_to", f"expected a body name, got {self.pinned_to!r}")
+        if len(self.position) == 2:
+            self.position = (*self.position, 0.0)
         check_structure(self)
 
     # -- its contribution to the assembly (DESIGN 2.1) --------------------------------------
@@ -245,21 +222,8 @@ class Gear(Body):
 
     def __post_init__(self):
         f = self._label()
-        self.teeth = v.plausible(f"{f}.teeth", v.integer(f"{f}.teeth", self.teeth, minimum=3),
-                                 "teeth")
-        self.module = v.positive(f"{f}.module", self.module, "m")
-        if self.module > 1.0:
-            raise ModelError(f"{f}.module", f"= {self.module!r} m: must be <= 1 m "
-                                            "(modules are in metres: 10 mm = 0.010)")
-        v.plausible(f"{f}.module", self.module, "module")
-        self.pressure_angle = v.angle(f"{f}.pressure_angle", self.pressure_angle,
-                                      low=1e-6, high=math.pi / 4)
-        self.helix_angle = v.angle(f"{f}.helix_angle", self.helix_angle,
-                                   low=-math.pi / 4, high=math.pi / 4)
-        if self.face_width is not None:
-            self.face_width = v.positive(f"{f}.face_width", self.face_width, "m")
-        if not isinstance(self.internal, bool):
-            raise ModelError(f"{f}.internal", f"expected true/false, got {self.internal!r}")
+        Gear.SCHEMA.check(self, ("teeth", "module", "pressure_angle", "helix_angle",
+                                 "face_width", "internal"), f)
         super().__post_init__()
 
     @property
@@ -330,7 +294,8 @@ Gear.SCHEMA = Table("bodies (kind = \"gear\")", (
     NAME,
     Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth", limits="teeth"),
     Field("module", "number", "m", low=0.0, low_open=True, high=1.0, default=REQUIRED,
-          doc="normal module (10 mm = 0.010)", limits="module"),
+          doc="normal module (10 mm = 0.010)", limits="module",
+          note="modules are in metres: 10 mm = 0.010"),
     Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 4, high_open=True,
           default=REQUIRED, doc="normal pressure angle", deg_floor=10.0),
     Field("helix_angle", "angle", "rad", low=-math.pi / 4, high=math.pi / 4, high_open=True,

@@ -83,20 +83,13 @@ class Mesh(Element):
         f = self.name
         v.name("Mesh.name", self.name)
         check_structure(self)
-        if not isinstance(self.alternation, bool):
-            raise ModelError(f"{f}.alternation", f"expected true/false, got "
-                             f"{self.alternation!r}")
-        if self.contact_ratio is not None:
-            self.contact_ratio = v.number(f"{f}.contact_ratio", self.contact_ratio)
-            if not 1.0 < self.contact_ratio < 2.0:
-                raise ModelError(f"{f}.contact_ratio", f"= {self.contact_ratio!r}: must lie in "
-                                 "(1, 2) (single/double tooth-pair alternation)")
-        self.stiffness_ratio = v.number(f"{f}.stiffness_ratio", self.stiffness_ratio)
-        if not 1.0 <= self.stiffness_ratio <= 10.0:
-            raise ModelError(f"{f}.stiffness_ratio", f"= {self.stiffness_ratio!r}: must lie in "
-                             "[1, 10] (double-pair over single-pair stiffness)")
-        self.phase = v.number(f"{f}.phase", self.phase)
-        te = self.transmission_error
+        # types and ranges: the schema's (one statement for the file and the API)
+        Mesh.SCHEMA.check(self, ("gear_a", "gear_b", "stiffness", "backlash", "damping",
+                                 "pressure_angle", "base_radii", "helix_angle", "internal",
+                                 "alternation", "contact_ratio", "stiffness_ratio", "phase"))
+        if self.side not in (1, -1):
+            raise ModelError(f"{f}.side", f"= {self.side!r}: must be +1 or -1")
+        te = self.transmission_error  # (amplitude >= 0, phase): a range per column
         if not isinstance(te, (list, tuple)) or not all(
                 isinstance(x, (list, tuple)) and len(x) == 2 for x in te):
             raise ModelError(f"{f}.transmission_error", f"= {te!r}: expected [[amplitude_m, "
@@ -105,17 +98,6 @@ class Mesh(Element):
             (v.plausible(f"{f}.transmission_error[{i}]", v.nonnegative(
                 f"{f}.transmission_error[{i}]", a, "m"), "gap"),
              v.number(f"{f}.transmission_error[{i}]", p, "rad")) for i, (a, p) in enumerate(te))
-        self.stiffness = v.plausible(f"{f}.stiffness", v.nonnegative(
-            f"{f}.stiffness", self.stiffness, "N/m"), "stiffness")
-        self.backlash = v.plausible(f"{f}.backlash", v.nonnegative(
-            f"{f}.backlash", self.backlash, "m"), "gap")
-        self.damping = v.plausible(f"{f}.damping", v.nonnegative(
-            f"{f}.damping", self.damping, "N s/m"), "damping")
-        if self.side not in (1, -1):
-            raise ModelError(f"{f}.side", f"= {self.side!r}: must be +1 or -1")
-        if self.pressure_angle is not None:
-            self.pressure_angle = v.angle(f"{f}.pressure_angle", self.pressure_angle,
-                                          low=1e-6, high=math.pi / 2)
 
     # -- in a model ---------------------------------------------------------------------
     def references(self) -> list[tuple[str, str, str]]:
@@ -288,9 +270,11 @@ Mesh.SCHEMA = Table("meshes", (
     Field("alternation", "boolean", default=False,
           doc="stiffness alternates between single and double tooth-pair contact"),
     Field("contact_ratio", "number", low=1.0, high=2.0, low_open=True, high_open=True,
-          doc="transverse contact ratio (default: from the gears)"),
+          doc="transverse contact ratio (default: from the gears)",
+          note="single/double tooth-pair alternation"),
     Field("stiffness_ratio", "number", low=1.0, high=10.0, default=1.75,
-          doc="double-pair over single-pair stiffness"),
+          doc="double-pair over single-pair stiffness",
+          note="double-pair over single-pair stiffness"),
     Field("phase", "number", default=0.0,
           doc="fraction of a mesh period elapsed at input azimuth 0"),
     *STRUCTURE, Field("planet", "name", doc="the planet this mesh belongs to"),

@@ -216,6 +216,31 @@ class Field:
             return out
         raise AssertionError(f"unknown field type {t!r}")
 
+    def check(self, path: str, value):
+        """``value`` as a component holds it (the API's: radians, tuples), checked against this
+        field's type and range, the one statement of them for the file and the API; raises
+        :class:`ModelError` naming ``path``. ``None`` passes where the field is optional
+        (default ``None``)."""
+        if value is None and self.default is None:
+            return None
+        t = self.type
+        if t in ("vector", "pairs") and isinstance(value, tuple):
+            value = [list(x) if isinstance(x, tuple) else x for x in value]
+        if t == "angle" and self.low is not None and self.high is not None \
+                and not self.low_open:  # with the hint for degrees given as radians
+            return v.angle(path, value, low=self.low, high=self.high,
+                           high_strict=self.high_open)
+        if t == "angle":
+            x = v.number(path, value, "rad")
+            self._in_range(path, x)
+            return x
+        out = self.read(path, value)
+        if t == "vector":
+            return tuple(out)
+        if t == "pairs":
+            return tuple(tuple(p) for p in out)
+        return out
+
     def _in_range(self, path: str, x: float) -> None:
         """Raise naming the bound ``x`` violates (``= -3.0: must be > 0 kg``)."""
         u = f" {self.unit}" if self.unit else ""
@@ -323,6 +348,16 @@ class Table:
             if f.default is not None:
                 out[f.key] = _fresh(f.default)
         return out
+
+    def check(self, component, keys, label: str | None = None) -> None:
+        """Check and convert the attributes ``keys`` of ``component`` (an instance of the kind
+        this table describes) in place, by their fields (:meth:`Field.check`): errors name
+        ``<label>.<key>`` (``label`` default: the component's name)."""
+        fields = self.by_key()
+        label = component.name if label is None else label
+        for key in keys:
+            setattr(component, key, fields[key].check(f"{label}.{key}",
+                                                      getattr(component, key)))
 
     def write(self, values: dict) -> dict:
         """A file table of ``values`` (``{key: API value}``): ``None`` and values equal to

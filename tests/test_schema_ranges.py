@@ -1,0 +1,65 @@
+"""Each component's types and ranges are stated once, in its ``SCHEMA``: the constructor (the
+API) and the model file refuse the same values with the same bound (issue 37)."""
+
+import math
+
+import pytest
+
+from gearmodal import Bearing, Gear, Mesh, ModelError, RigidBody
+
+BASE = {
+    Mesh: dict(name="m", gear_a="a", gear_b="b", stiffness=1e8),
+    Bearing: dict(name="brg", a="a", stiffness={"x": 1e8, "y": 1e8}),
+    Gear: dict(name="g", teeth=20, module=0.01, pressure_angle=0.35, mass=1.0, inertia=0.1),
+    RigidBody: dict(name="r", mass=1.0, inertia=1.0),
+}
+
+
+def _outside(f):
+    """Values just outside each bound of field ``f`` (and the bound itself where it is open)."""
+    out = []
+    for bound, is_open, sign in ((f.low, f.low_open, -1.0), (f.high, f.high_open, 1.0)):
+        if bound is None:
+            continue
+        if f.type == "integer":
+            out.append(int(bound) + int(sign))
+        else:
+            out.append(bound if is_open else bound + sign * max(abs(bound), 1.0) * 1e-9)
+    return out
+
+
+CASES = [(cls, f, bad) for cls in BASE for f in cls.SCHEMA.fields
+         if f.type in ("number", "angle", "integer") for bad in _outside(f)
+         if f.key != "side"]  # (side is +1 or -1: a set, checked on its own)
+
+
+@pytest.mark.parametrize("cls, f, bad", CASES,
+                         ids=[f"{c.__name__}.{f.key}={b!r}" for c, f, b in CASES])
+def test_the_api_and_the_file_refuse_the_same_values(cls, f, bad):
+    base = BASE[cls]
+    with pytest.raises(ModelError) as api:
+        cls(**{**base, f.key: bad})
+    assert api.value.field == f"{base['name']}.{f.key}"
+    with pytest.raises(ModelError):
+        f.read("file.key", bad)
+    inside = f.low if f.low is not None and not f.low_open else None
+    if inside is not None and f.key not in ("inertia_diametral",):
+        cls(**{**base, f.key: inside})  # the closed bound itself is allowed by both
+        f.read("file.key", inside)
+
+
+@pytest.mark.parametrize("key", ["stiffness", "damping", "clearance"])
+def test_a_bearing_refuses_a_negative_direction_as_its_file_does(key):
+    f = Bearing.SCHEMA.by_key()[key]
+    value = {"x": 1e8, "y": -1.0} if key == "stiffness" else {"x": -1.0}
+    with pytest.raises(ModelError, match=rf"brg\.{key}\.[xy] = -1\.0: must be >= 0"):
+        Bearing(**{**BASE[Bearing], key: value})
+    with pytest.raises(ModelError, match=r"must be >= 0"):
+        f.read("file.key", value)
+
+
+def test_an_angle_given_in_degrees_gets_the_radians_hint():
+    with pytest.raises(ModelError, match=r"g\.pressure_angle = 20\.0 rad: .*radians\(20\)"):
+        Gear(**{**BASE[Gear], "pressure_angle": 20})
+    m = Mesh(**{**BASE[Mesh], "pressure_angle": math.radians(20), "base_radii": [0.1, 0.2]})
+    assert m.base_radii == (0.1, 0.2)  # a vector is held as a tuple whatever was given
