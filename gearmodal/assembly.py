@@ -203,6 +203,11 @@ class Assembly:
     springs: Contacts | None = None
     round: Contacts | None = None
 
+    def reduction(self) -> tuple[Assembly, np.ndarray | None]:
+        """``(assembly to solve, N)``: ``(self, None)``; a coupled assembly answers its
+        projection on the constrained coordinates (:class:`gearmodal.coupling.CoupledAssembly`)."""
+        return self, None
+
     def require_piecewise_linear(self, what: str) -> None:
         """Raise a :class:`ModelError` naming the bearing if the model has a round clearance,
         which ``what`` (a method, a solver) cannot handle."""
@@ -347,10 +352,7 @@ def _cached(model, azimuth: float, key: bytes | None) -> Assembly:
 def reduction(asm: Assembly) -> tuple[Assembly, np.ndarray | None]:
     """``(assembly to solve, N)``: a coupled assembly's projection on its constrained
     coordinates ``q = N z`` (:mod:`gearmodal.coupling`), or ``(asm, None)``."""
-    N = getattr(asm, "N", None)
-    if N is None:
-        return asm, None
-    return asm.reduced(), N
+    return asm.reduction()
 
 
 def _acts(w: np.ndarray) -> bool:

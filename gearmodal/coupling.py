@@ -366,6 +366,10 @@ class CoupledAssembly(Assembly):
     constraint_names: list = field(default_factory=list)
     _reduced: Assembly | None = None
 
+    def reduction(self) -> tuple[Assembly, np.ndarray]:
+        """``(the assembly in z, N)``: :meth:`reduced` and the basis ``q = N z``."""
+        return self.reduced(), self.N
+
     def reduced(self) -> Assembly:
         """The coupled equations projected on ``q = N z`` (module docstring)."""
         if self._reduced is None:

@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ..assembly import Assembly
+from ..coupling import Coupled
 from ..errors import ModelError, unknown
 from ..model import validate as v
 from ..model.model import Model
@@ -88,9 +89,9 @@ def rotating_geometry(model: Model) -> bool:
         return True  # offsets turning (run-out, transmission error)
     pairs = [(a.K, b.K), (a.C, b.C), (a.B, b.B), (a.contacts.W, b.contacts.W),
              (a.contacts.offset, b.contacts.offset)]
-    for part in ("springs", "round"):
-        if getattr(a, part) is not None:
-            pairs.append((getattr(a, part).W, getattr(b, part).W))
+    for pa, pb in ((a.springs, b.springs), (a.round, b.round)):
+        if pa is not None:
+            pairs.append((pa.W, pb.W))
     return not all(same(x, y) for x, y in pairs)
 
 
@@ -170,15 +171,15 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         raise ModelError("dt", f"= {dt!r}: t_end / dt = {t_end / dt:.3g} output steps; at most "
                          f"{MAX_STEPS:.0e} (a longer dt, or a shorter t_end = {t_end!r} s)")
     n_steps = int(math.ceil(t_end / dt - 1e-9))
-    from ..coupling import Coupled
 
     omega = float(speed_rpm) * 2 * math.pi / 60  # the input azimuth is omega t
     casm = None  # the full assembly of a coupled system, solved in q = N z
     geo = None
     if isinstance(model, Assembly):
         asm, name = model, ""
-        if getattr(model, "N", None) is not None:
-            casm, asm = model, model.reduced()
+        red, N = model.reduction()
+        if N is not None:  # a coupled assembly: solved in its constrained coordinates
+            casm, asm = model, red
     elif isinstance(model, (Model, Coupled)):
         asm, name = model.assemble(), model.name
         if isinstance(model, Coupled):
@@ -320,7 +321,7 @@ def _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm) -> None:
     result.q = pd.DataFrame(Q, index=idx, columns=casm.dof_names)
     result.v = pd.DataFrame(V, index=idx, columns=casm.dof_names)
     result.constraint_forces = pd.DataFrame(LAM, index=idx, columns=casm.constraint_names)
-    if hasattr(model, "constraint_residual"):
+    if isinstance(model, Coupled):
         result.constraint_residual = model.constraint_residual(result.q)
         result.stats["max_constraint_residual"] = float(
             np.abs(result.constraint_residual.to_numpy()).max(initial=0.0))

@@ -45,8 +45,8 @@ def _spring_rows(system) -> list[int]:
     if sp is None or not len(sp):
         return []
     rows = list(range(len(sp)))
-    geo = getattr(system, "geometry", None)
-    if geo is not None and "springs.W" in getattr(geo, "coef", {}):
+    geo = system.geometry
+    if geo is not None and "springs.W" in geo.coef:
         a, b = geo.coef["springs.W"]
         hs = np.asarray(geo.harmonics)
         # a row turns when its harmonics are more than the rounding of their fit

@@ -1924,7 +1924,7 @@ def spectral_bound_all(system, parts: bool = False):
             return float(max(abs(e_lo[0]), abs(e_lo[-1]), abs(e_hi[0]), abs(e_hi[-1])))
         return float(np.linalg.norm(A0, 2) + np.sum(np.abs(per_contact) * w2))
 
-    k = norm_bound(system.K0, getattr(system, "k_max", system.k))  # alternating meshes: max
+    k = norm_bound(system.K0, system.k_max)  # alternating meshes: max
     c = norm_bound(system.C0, system.c)
     if parts:
         return k, c
@@ -1966,7 +1966,7 @@ class StateBound:
                         <= 1e-12 * np.abs(K).max(initial=1e-300))
         shim = types.SimpleNamespace(n=system.n, Linv=Li, W=f["W"], K0=K, C0=f["C0"],
                                      k=system.k, c=system.c,
-                                     k_max=getattr(system, "k_max", system.k))
+                                     k_max=system.k_max)
         if parts is None or system.turning:
             parts = spectral_bound_all(shim, parts=True)
         k_all, c0 = parts
@@ -2074,7 +2074,7 @@ def spectral_bound_turning(system) -> float:
         f = system.at(2.0 * math.pi * j / BOUND_AZIMUTHS)
         shim = types.SimpleNamespace(n=system.n, Linv=system.Linv, W=f["W"], K0=f["K0"],
                                      C0=f["C0"], k=system.k, c=system.c,
-                                     k_max=getattr(system, "k_max", system.k))
+                                     k_max=system.k_max)
         vals.append(spectral_bound_all(shim))
     hi, lo = max(vals), min(vals)
     top = float(np.max(system.periodic.harm)) * abs(system.omega)
@@ -2109,7 +2109,7 @@ class TaylorIntegrator:
         np.cumsum(np.bincount(rows, minlength=system.W.shape[0]), out=self.wptr[1:])
         self.widx = cols.astype(np.int64)
         self.wval = np.ascontiguousarray(system.W[rows, cols])
-        base = getattr(system, "rho_base", None)
+        base = system.rho_base
         parts = None
         if base:
             # a system that differs from the one that computed ``base`` only in its speed
@@ -2117,7 +2117,7 @@ class TaylorIntegrator:
             # eigenvalues; the series' tail check still halves any piece it makes too long
             self.rho = RHO_SPEED * float(base)
             rho_shared = float(base)  # passed on as is: margins do not compound
-            sb = getattr(system, "state_bound_base", None)
+            sb = system.state_bound_base
         elif system.turning:
             self.rho = max(spectral_bound_turning(system), 1e-300)
             rho_shared = self.rho
@@ -2140,6 +2140,7 @@ class TaylorIntegrator:
         self.tscale = TERM_BINS * self.rho / reach
         self.h_max = reach / self.rho
         self.MinvU = np.ascontiguousarray(system.MinvU)
+        self._carry = None  # (k, s, arrays) where a chained run's last call ended
         if system.turning:
             pr, GT = system.periodic, system.GT
             if GT.shape != (len(pr.harm),) + self.MinvU.shape:  # forces given as such
@@ -2169,7 +2170,7 @@ class TaylorIntegrator:
         call's start and end times from the run's start (with ``k_org``), when the caller's
         times are not ``k dt`` (:func:`taylor_run`)."""
         sysm = self.sys
-        last = getattr(self, "_carry", None)  # (k, s, arrays) where the last call ended
+        last = self._carry  # (k, s, arrays) where the last call ended
         chained = (k_org is not None and last is not None and last[0] == k_org
                    and np.array_equal(last[1], s0))
         t_org = 0.0 if k_org is None else k_org * self.dt
