@@ -10,7 +10,8 @@ import dataclasses
 import math
 
 from .bearing import Bearing
-from .components import DOF_LEVELS
+from .components import DOF_LEVELS, Gear, RigidBody
+from .mesh import Mesh
 from .schema import REQUIRED, Field, Table
 
 MODEL_TYPES = ("drivetrain", "gear_pair", "planetary_stage", "parallel_stage",
@@ -22,15 +23,18 @@ def _required(f: Field) -> Field:
     return dataclasses.replace(f, default=REQUIRED)
 
 
-_POS = {"low": 0.0, "low_open": True}
 _NONNEG = {"low": 0.0}
+# the components' own fields (their types and ranges stated once, in the component's SCHEMA)
+_G, _R, _M = Gear.SCHEMA.by_key(), RigidBody.SCHEMA.by_key(), Mesh.SCHEMA.by_key()
 _DOFS = Field("dofs", "choice", choices=DOF_LEVELS, doc="DOF level of the bodies")
-_MASS = Field("mass", "number", "kg", **_POS, default=REQUIRED, doc="mass", limits="mass")
-_INERTIA = Field("inertia", "number", "kg m^2", **_POS, default=REQUIRED,
-                 doc="polar moment of inertia", limits="inertia")
-_DIAMETRAL = Field("inertia_diametral", "number", "kg m^2", **_POS,
-                   doc="moment of inertia about a diameter (default inertia / 2)",
-                   limits="inertia")
+_MASS, _INERTIA, _DIAMETRAL = _R["mass"], _R["inertia"], _R["inertia_diametral"]
+
+
+def _mesh(key: str, api: str, **changes) -> Field:
+    """A stage's mesh field ``key`` from the mesh's own field ``api``."""
+    return dataclasses.replace(_M[api], key=key, **changes)
+
+
 _ALTERNATION = Field("mesh_alternation", "alternation", default=False,
                      doc="true, or a table of contact_ratio, stiffness_ratio, phase: the mesh "
                          "stiffness alternates between single and double tooth-pair contact")
@@ -47,16 +51,8 @@ MODEL = Table("model", (
               "(0, -cos tilt, sin tilt)")),
     "Every model file's `[model]` table.")
 GEAR = Table("gear (sun, planet, ring, gear, pinion, wheel)", (
-    Field("teeth", "integer", low=3, default=REQUIRED, doc="number of teeth", limits="teeth"),
-    Field("module", "number", "m", **_POS, high=1.0, default=REQUIRED,
-          doc="normal module (10 mm = 0.010)", note="modules are in metres: 10 mm = 0.010",
-          limits="module"),
-    Field("pressure_angle", "angle", "rad", low=1e-6, high=math.pi / 4, high_open=True,
-          degrees=True, default=REQUIRED, doc="normal pressure angle", deg_floor=10.0),
-    Field("helix_angle", "angle", "rad", low=-math.pi / 4, high=math.pi / 4, high_open=True,
-          degrees=True, default=0.0, doc="helix angle, signed (positive = right hand)",
-          deg_floor=1.0),
-    Field("face_width", "number", "m", **_POS, doc="face width"),
+    _G["teeth"], _G["module"], dataclasses.replace(_G["pressure_angle"], degrees=True),
+    dataclasses.replace(_G["helix_angle"], degrees=True), _G["face_width"],
     _MASS, _INERTIA, _DIAMETRAL),
     "A gear wheel; the ring is internal by definition.")
 BODY = Table("body (rotor, generator, housing)", (
@@ -83,12 +79,9 @@ _STAGE_COMMON = (
           doc="torsional coupling to the previous stage's output (not on the first stage; "
               "default 1e9)"),
     dataclasses.replace(_DOFS, default="planar"),
-    Field("mesh_stiffness", "per_mesh", "N/m", **_NONNEG, default=REQUIRED,
-          doc="mesh stiffness on the line of action", limits="stiffness"),
-    Field("backlash", "number", "m", **_NONNEG, default=0.0, doc="backlash on the line of action",
-          limits="gap"),
-    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping",
-          limits="damping"),
+    _mesh("mesh_stiffness", "stiffness", type="per_mesh",
+          doc="mesh stiffness on the line of action"),
+    _M["backlash"], _mesh("mesh_damping", "damping"),
     _ALTERNATION)
 PLANETARY = Table("planetary stage (`[planetary_stage]` or a `[[stages]]` entry)", (
     *_STAGE_COMMON,
@@ -131,12 +124,8 @@ PARALLEL = Table("parallel stage (`[parallel_stage]` or a `[[stages]]` entry)", 
     "A parallel (speed-increasing) stage.")
 GEAR_PAIR = Table("gear_pair", (
     dataclasses.replace(_DOFS, default="torsional"),
-    Field("mesh_stiffness", "number", "N/m", **_NONNEG, default=REQUIRED,
-          doc="mesh stiffness on the line of action", limits="stiffness"),
-    Field("backlash", "number", "m", **_NONNEG, default=REQUIRED, doc="backlash",
-          limits="gap"),
-    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping",
-          limits="damping"),
+    _mesh("mesh_stiffness", "stiffness", doc="mesh stiffness on the line of action"),
+    _mesh("backlash", "backlash", default=REQUIRED), _mesh("mesh_damping", "damping"),
     Field("bearing", "support", doc="both wheels to the ground (required unless torsional)"),
     Field("pinion", "table", default=REQUIRED, doc="gear table"),
     Field("wheel", "table", default=REQUIRED, doc="gear table"),
@@ -148,9 +137,7 @@ LIN_PARKER = Table("lin_parker_stage", (
           doc="pressure angle, a number or {sun_planet, ring_planet}"),
     Field("planet_angles", "vector", "rad", degrees=True,
           doc="planet positions (default equally spaced)"),
-    Field("backlash", "number", "m", **_NONNEG, default=0.0, doc="backlash", limits="gap"),
-    Field("mesh_damping", "number", "N s/m", **_NONNEG, default=0.0, doc="mesh damping",
-          limits="damping"),
+    _M["backlash"], _mesh("mesh_damping", "damping"),
     Field("mass", "table", "kg", default=REQUIRED, doc="carrier, ring, sun, planet"),
     Field("inertia_over_r2", "table", "kg", default=REQUIRED, doc="carrier, ring, sun, planet"),
     Field("bearing", "table", "N/m", default=REQUIRED, doc="carrier, ring, sun, planet"),
@@ -166,10 +153,8 @@ PER_MESH_ANGLE = Table("lin_parker_stage pressure angles", (
           default=REQUIRED, doc="ring-planet meshes", deg_floor=10.0)),
     "Lin & Parker's pressure angles per mesh kind, in degrees.")
 PER_MESH = Table("per mesh (sun_planet, ring_planet)", (
-    Field("sun_planet", "number", "N/m", **_NONNEG, default=REQUIRED, doc="sun-planet meshes",
-          limits="stiffness"),
-    Field("ring_planet", "number", "N/m", **_NONNEG, default=REQUIRED,
-          doc="ring-planet meshes", limits="stiffness")),
+    _mesh("sun_planet", "stiffness", doc="sun-planet meshes"),
+    _mesh("ring_planet", "stiffness", doc="ring-planet meshes")),
     "A value per mesh kind.")
 _BODIES4 = ("carrier", "ring", "sun", "planet")
 LIN_PARKER_BODIES = Table("lin_parker_stage per body", tuple(

@@ -203,6 +203,10 @@ class Field:
                                              isinstance(value, bool)):
                 raise ModelError(path, f"expected a {TYPES[t]}, got {type(value).__name__} "
                                        f"{value!r}")
+            if t == "per_mesh" and not isinstance(value, dict):  # one number for every mesh
+                x = v.number(path, value, self.unit)
+                self._in_range(path, x)
+                return x
             return value
         if t == "names":
             if not isinstance(value, dict):
