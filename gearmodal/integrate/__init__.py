@@ -151,48 +151,9 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     [['mesh', 'front', 'closed'], ['mesh', 'front', 'open']]
     """
     get_method(method, options)  # the name and its options checked
-    for label, val in (("t_end", t_end), ("dt", dt)):
-        if not isinstance(val, (int, float)) or isinstance(val, bool) or not math.isfinite(val) \
-                or val <= 0:
-            raise ModelError(label, f"= {val!r}: must be a finite number > 0 s")
-    if not isinstance(speed_rpm, (int, float)) or isinstance(speed_rpm, bool) \
-            or not math.isfinite(speed_rpm):
-        raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number (rpm)")
-    v.plausible("speed_rpm", float(speed_rpm), "speed_rpm")
-    v.plausible("t_end", float(t_end), "time")
-    v.plausible("dt", float(dt), "time")
-    if not isinstance(load_dt, (int, float)) or isinstance(load_dt, bool) \
-            or not math.isfinite(load_dt) or load_dt <= 0:
-        raise ModelError("load_dt", f"= {load_dt!r}: must be a finite number > 0 s")
-    if dt > t_end:
-        raise ModelError("dt", f"= {dt!r}: must be at most t_end = {t_end!r} s (the run would "
-                         f"end at {dt!r} s)")
-    if t_end / dt > MAX_STEPS:
-        raise ModelError("dt", f"= {dt!r}: t_end / dt = {t_end / dt:.3g} output steps; at most "
-                         f"{MAX_STEPS:.0e} (a longer dt, or a shorter t_end = {t_end!r} s)")
-    n_steps = int(math.ceil(t_end / dt - 1e-9))
-
+    n_steps = _output_steps(t_end, dt, speed_rpm, load_dt)
     omega = float(speed_rpm) * 2 * math.pi / 60  # the input azimuth is omega t
-    casm = None  # the full assembly of a coupled system, solved in q = N z
-    geo = None
-    if isinstance(model, Assembly):
-        asm, name = model, ""
-        red, N = model.reduction()
-        if N is not None:  # a coupled assembly: solved in its constrained coordinates
-            casm, asm = model, red
-    elif isinstance(model, (Model, Coupled)):
-        asm, name = model.assemble(), model.name
-        if isinstance(model, Coupled):
-            casm, asm = asm, asm.reduced()
-        if omega != 0.0 and rotating_geometry(model):
-            if casm is not None:
-                raise ModelError("speed_rpm", f"= {speed_rpm!r}: a coupled system whose frames "
-                                 "turn against each other is not integrated yet (its "
-                                 "constraint forces need the turning geometry too); run it at "
-                                 "0 rpm or simulate the gearbox alone")
-            geo = AzimuthAssembler(model)
-    else:
-        raise TypeError(f"expected a gm.Model or gm.Coupled, got {type(model).__name__}")
+    asm, name, casm, geo = _assembly_of(model, omega, speed_rpm)
     nc = len(asm.contacts.element) if asm.contacts is not None else 0
     check_fits(n_steps + 1, 2 * asm.n + nc + (len(asm.springs) if asm.springs is not None
                                                else 0),
@@ -252,6 +213,58 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         _expand_coupled(result, model, casm, [(0, n_steps, system, casm, paths.values(t))], X,
                         S, speed_rpm)
     return result
+
+
+def _output_steps(t_end, dt, speed_rpm, load_dt) -> int:
+    """The number of output steps of a run of ``t_end`` s at ``dt``, its arguments checked
+    (:func:`simulate`)."""
+    for label, val in (("t_end", t_end), ("dt", dt)):
+        if not isinstance(val, (int, float)) or isinstance(val, bool) or not math.isfinite(val) \
+                or val <= 0:
+            raise ModelError(label, f"= {val!r}: must be a finite number > 0 s")
+    if not isinstance(speed_rpm, (int, float)) or isinstance(speed_rpm, bool) \
+            or not math.isfinite(speed_rpm):
+        raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number (rpm)")
+    v.plausible("speed_rpm", float(speed_rpm), "speed_rpm")
+    v.plausible("t_end", float(t_end), "time")
+    v.plausible("dt", float(dt), "time")
+    if not isinstance(load_dt, (int, float)) or isinstance(load_dt, bool) \
+            or not math.isfinite(load_dt) or load_dt <= 0:
+        raise ModelError("load_dt", f"= {load_dt!r}: must be a finite number > 0 s")
+    if dt > t_end:
+        raise ModelError("dt", f"= {dt!r}: must be at most t_end = {t_end!r} s (the run would "
+                         f"end at {dt!r} s)")
+    if t_end / dt > MAX_STEPS:
+        raise ModelError("dt", f"= {dt!r}: t_end / dt = {t_end / dt:.3g} output steps; at most "
+                         f"{MAX_STEPS:.0e} (a longer dt, or a shorter t_end = {t_end!r} s)")
+    return int(math.ceil(t_end / dt - 1e-9))
+
+
+def _assembly_of(model, omega: float, speed_rpm):
+    """``(assembly solved, model name, coupled assembly or None, turning geometry or None)``
+    of what :func:`simulate` was given: a coupled system is solved in its constrained
+    coordinates ``q = N z``; frames turning against each other at ``omega`` (rad/s) get
+    their geometry's assembler."""
+    casm = geo = None
+    if isinstance(model, Assembly):
+        asm, name = model, ""
+        red, N = model.reduction()
+        if N is not None:  # a coupled assembly: solved in its constrained coordinates
+            casm, asm = model, red
+    elif isinstance(model, (Model, Coupled)):
+        asm, name = model.assemble(), model.name
+        if isinstance(model, Coupled):
+            casm, asm = asm, asm.reduced()
+        if omega != 0.0 and rotating_geometry(model):
+            if casm is not None:
+                raise ModelError("speed_rpm", f"= {speed_rpm!r}: a coupled system whose frames "
+                                 "turn against each other is not integrated yet (its "
+                                 "constraint forces need the turning geometry too); run it at "
+                                 "0 rpm or simulate the gearbox alone")
+            geo = AzimuthAssembler(model)
+    else:
+        raise TypeError(f"expected a gm.Model or gm.Coupled, got {type(model).__name__}")
+    return asm, name, casm, geo
 
 
 def event_array(chunks) -> np.ndarray:
