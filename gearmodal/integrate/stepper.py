@@ -186,20 +186,7 @@ class Stepper:
                  azimuth0: float = 0.0, speed_torque: SpeedTorque | None = None,
                  top_frequency_hz: float | None = None, **options):
         get_method(method, options)
-        if reference not in REFERENCES:
-            raise ModelError("reference", f"= {reference!r}: must be one of "
-                             + ", ".join(map(repr, REFERENCES)))
-        self.follow = reference == "follow"
-        self.rebase_speed = _positive("rebase_speed", rebase_speed)
-        self.rebase_angle = _positive("rebase_angle", rebase_angle)
-        self.rebase_steps = 0  # "follow" may re-base at every call's end
-        if rebase_dt is not None:
-            self._rebase_dt = _positive("rebase_dt", rebase_dt)
-            self.rebase_steps = round(self._rebase_dt / float(dt))
-            if self.rebase_steps < 1 or abs(self.rebase_steps * dt - rebase_dt) \
-                    > GRID_TOL * rebase_dt:
-                raise ModelError("rebase_dt", f"= {rebase_dt!r}: must be a whole number of "
-                                 f"output steps dt = {dt!r} s")
+        self._reference_settings(reference, rebase_speed, rebase_angle, rebase_dt, dt)
         if not isinstance(model, Model):
             raise TypeError(f"expected a gm.Model, got {type(model).__name__}")
         self.dt = _positive("dt", dt)
@@ -221,38 +208,8 @@ class Stepper:
         asm = model.assemble() if geo is None else geo.template
         self.asm = asm
         self.geo = geo if turns else None
-        names = list(asm.load_names)
         loads = dict(loads or {})
-        for name, val in loads.items():
-            if name not in names:
-                raise ModelError(f"loads.{name}", unknown("load", name, names))
-            _number(f"loads.{name}", val)
-        self.drive = drive
-        cols = {names.index(nm) for nm in loads}
-        grounded = ()
-        if drive is not None:
-            if not isinstance(drive, Drive):
-                raise TypeError(f"drive: expected a gm.Drive, got {type(drive).__name__}")
-            self._i_drive, j = self._torque_column(drive.dof, "drive")
-            cols.add(j)
-            self._drive_name = names[j]
-            _positive("drive.stiffness", drive.stiffness)
-            c = _number("drive.damping", drive.damping)
-            if c < 0:
-                raise ModelError("drive.damping", f"= {c!r}: must be >= 0 N m s/rad")
-            grounded = ((self._i_drive, float(drive.stiffness), float(drive.damping)),)
-        self.speed_torque = None
-        if speed_torque is not None:
-            self._check_speed_torque(speed_torque)
-            i, j = self._torque_column(speed_torque.dof, "speed_torque")
-            self._st_index = (i, j)
-            cols.add(j)
-            self.speed_torque = speed_torque
-        self.columns = sorted(cols)
-        self.load_index = {names[j]: i for i, j in enumerate(self.columns)}
-        self.u = np.zeros(len(self.columns))
-        for name, val in loads.items():
-            self.u[self.load_index[name]] = float(val)
+        grounded = self._inputs(asm, loads, drive, speed_torque)
         # every rotation's reference speed per input speed (its body's speed_ratio)
         self.ratio = np.array([self._reference_ratio(d) for d in asm.dof_names])
         self.ref = _Reference(self.omega, psi0)
@@ -326,6 +283,69 @@ class Stepper:
         if self.follow:
             self.settings.update(rebase_speed=self.rebase_speed,
                                  rebase_angle=self.rebase_angle)
+        self._outputs(asm, outputs, drive)
+        self._qv_names = self.output_names[:2 * len(asm.dof_names)]  # q, then velocities
+        self._force_rebase = False  # set_speed_torque: re-base at the next call's start
+        self._reserved = None  # reserve(): the output steps held
+        self._cpu = time.process_time() - cpu
+        self._done = None
+
+    def _reference_settings(self, reference, rebase_speed, rebase_angle, rebase_dt,
+                            dt) -> None:
+        """``reference`` and its re-basing settings, checked (:class:`Stepper`)."""
+        if reference not in REFERENCES:
+            raise ModelError("reference", f"= {reference!r}: must be one of "
+                             + ", ".join(map(repr, REFERENCES)))
+        self.follow = reference == "follow"
+        self.rebase_speed = _positive("rebase_speed", rebase_speed)
+        self.rebase_angle = _positive("rebase_angle", rebase_angle)
+        self.rebase_steps = 0  # "follow" may re-base at every call's end
+        if rebase_dt is not None:
+            self._rebase_dt = _positive("rebase_dt", rebase_dt)
+            self.rebase_steps = round(self._rebase_dt / float(dt))
+            if self.rebase_steps < 1 or abs(self.rebase_steps * dt - rebase_dt) \
+                    > GRID_TOL * rebase_dt:
+                raise ModelError("rebase_dt", f"= {rebase_dt!r}: must be a whole number of "
+                                 f"output steps dt = {dt!r} s")
+
+    def _inputs(self, asm, loads: dict, drive, speed_torque) -> tuple:
+        """The load columns the host sets (``loads``, the drive's and the speed torque's),
+        checked; returns the drive's grounded spring (:class:`Stepper`)."""
+        names = list(asm.load_names)
+        for name, val in loads.items():
+            if name not in names:
+                raise ModelError(f"loads.{name}", unknown("load", name, names))
+            _number(f"loads.{name}", val)
+        self.drive = drive
+        cols = {names.index(nm) for nm in loads}
+        grounded = ()
+        if drive is not None:
+            if not isinstance(drive, Drive):
+                raise TypeError(f"drive: expected a gm.Drive, got {type(drive).__name__}")
+            self._i_drive, j = self._torque_column(drive.dof, "drive")
+            cols.add(j)
+            self._drive_name = names[j]
+            _positive("drive.stiffness", drive.stiffness)
+            c = _number("drive.damping", drive.damping)
+            if c < 0:
+                raise ModelError("drive.damping", f"= {c!r}: must be >= 0 N m s/rad")
+            grounded = ((self._i_drive, float(drive.stiffness), float(drive.damping)),)
+        self.speed_torque = None
+        if speed_torque is not None:
+            self._check_speed_torque(speed_torque)
+            i, j = self._torque_column(speed_torque.dof, "speed_torque")
+            self._st_index = (i, j)
+            cols.add(j)
+            self.speed_torque = speed_torque
+        self.columns = sorted(cols)
+        self.load_index = {names[j]: i for i, j in enumerate(self.columns)}
+        self.u = np.zeros(len(self.columns))
+        for name, val in loads.items():
+            self.u[self.load_index[name]] = float(val)
+        return grounded
+
+    def _outputs(self, asm, outputs, drive) -> None:
+        """The outputs a call returns (:attr:`outputs`; default every one), checked."""
         self.output_names = (list(asm.dof_names) + [f"{d}.velocity" for d in asm.dof_names]
                              + list(self.fmap.labels)
                              + (["drive.torque"] if drive is not None else []))
@@ -338,11 +358,6 @@ class Stepper:
         self.outputs = list(outputs)
         # the force rows cost a mesh stiffness and a force map per call: only when asked for
         self._forces = any(name in self.fmap.labels for name in self.outputs)
-        self._qv_names = self.output_names[:2 * len(asm.dof_names)]  # q, then velocities
-        self._force_rebase = False  # set_speed_torque: re-base at the next call's start
-        self._reserved = None  # reserve(): the output steps held
-        self._cpu = time.process_time() - cpu
-        self._done = None
 
     @classmethod
     def from_scene(cls, scene, **kwargs) -> Stepper:
