@@ -343,7 +343,7 @@ API_CASES = [
      r"sun_planet1\.backlash = -0\.0001: must be >= 0"),
     ("pair-mesh-stiffness-negative",
      lambda: builders.gear_pair(_gear(teeth=20, name="p"), _gear(teeth=40, name="w"), -2e8, 0.0),
-     r"mesh\.stiffness = -200000000\.0: must be >= 0"),
+     r"gear_pair\.mesh_stiffness = -200000000\.0: must be >= 0"),
     ("pair-dofs", lambda: builders.gear_pair(_gear(teeth=20), _gear(teeth=40), 2e8, 0.0,
                                              dofs="spatial"),
      r"gear_pair\.dofs = 'spatial'"),

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import copy
 import math
+from typing import Annotated
 
 from ..errors import ModelError
+from . import spec as sp
 from . import validate as v
 from .bearing import Bearing, Shaft
 from .components import DOF_LEVELS, Frame, Gear, RigidBody
@@ -20,6 +22,19 @@ from .mesh import Mesh
 from .model import Model
 
 _CENTRAL = ("carrier", "ring", "sun")
+
+# -- the builders' parameters as their files have them (gearmodal.model.spec) ----------------
+_MF = Mesh.SCHEMA.by_key()
+_DOFS = sp.key("choice", choices=DOF_LEVELS, doc="DOF level of the bodies")
+_MESH_K = sp.like(_MF["stiffness"], doc="mesh stiffness on the line of action")
+_BACKLASH = sp.like(_MF["backlash"])
+_MESH_C = sp.like(_MF["damping"])
+_ALTERNATION = sp.key("alternation", default=False,
+                      doc="true, or a table of contact_ratio, stiffness_ratio, phase: the mesh "
+                          "stiffness alternates between single and double tooth-pair contact")
+_CENTRE = sp.key("number", "m", low=0.0, low_open=True,
+                 doc="operating centre distance of profile-shifted gears (default: the "
+                     "standard one); each mesh at its operating pressure angle")
 
 
 def _gear(g: Gear, field: str, name: str, dofs: str) -> Gear:
@@ -112,9 +127,15 @@ def _support(field: str, spec, dofs: str) -> dict:
     return out
 
 
-def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
-              mesh_damping: float = 0.0, dofs: str = "torsional",
-              bearing_stiffness=None, mesh_alternation=None) -> Model:
+@sp.checked
+def gear_pair(pinion: Annotated[Gear, sp.GEAR], wheel: Annotated[Gear, sp.GEAR],
+              mesh_stiffness: Annotated[float, _MESH_K], backlash: Annotated[float, _BACKLASH],
+              mesh_damping: Annotated[float, _MESH_C] = 0.0,
+              dofs: Annotated[str, _DOFS] = "torsional",
+              bearing_stiffness: Annotated[object, sp.key(
+                  "support", file="bearing",
+                  doc="both wheels to the ground (required unless torsional)")] = None,
+              mesh_alternation: Annotated[object, _ALTERNATION] = None) -> Model:
     """Two external gears on fixed bearings, free to rotate.
 
     Parameters
@@ -143,7 +164,6 @@ def gear_pair(pinion: Gear, wheel: Gear, mesh_stiffness: float, backlash: float,
     >>> gm.gear_pair(p, w, mesh_stiffness=2e8, backlash=1e-4).dof_names
     ['pinion.theta', 'wheel.theta']
     """
-    v.choice("gear_pair.dofs", dofs, DOF_LEVELS)
     p = _gear(pinion, "gear_pair.pinion", "pinion", dofs)
     w = _gear(wheel, "gear_pair.wheel", "wheel", dofs)
     if p.internal or w.internal:
@@ -563,11 +583,24 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
     return m.check()
 
 
-def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash: float = 0.0,
-                   mesh_damping: float = 0.0, gear_bearing=None, pinion_bearing=None,
-                   dofs: str = "planar", position=(0.0, 0.0), angle: float = 0.0,
-                   name: str = "parallel_stage", mesh_alternation=None,
-                   centre_distance: float | None = None) -> Model:
+@sp.checked
+def parallel_stage(gear: Annotated[Gear, sp.GEAR], pinion: Annotated[Gear, sp.GEAR], *,
+                   mesh_stiffness: Annotated[float, _MESH_K],
+                   backlash: Annotated[float, _BACKLASH] = 0.0,
+                   mesh_damping: Annotated[float, _MESH_C] = 0.0,
+                   gear_bearing: Annotated[object, sp.key(
+                       "support", doc="gear to the housing")] = None,
+                   pinion_bearing: Annotated[object, sp.key(
+                       "support", doc="pinion to the housing")] = None,
+                   dofs: Annotated[str, _DOFS] = "planar",
+                   position: Annotated[tuple, sp.key(
+                       "vector", "m", lengths=(2,), doc="[x, y] centre of the gear")] = (0.0, 0.0),
+                   angle: Annotated[float, sp.key(
+                       "angle", "rad", degrees=True,
+                       doc="direction from the gear to the pinion")] = 0.0,
+                   name: str = "parallel_stage",
+                   mesh_alternation: Annotated[object, _ALTERNATION] = None,
+                   centre_distance: Annotated[float | None, _CENTRE] = None) -> Model:
     """A parallel (speed-increasing) stage: ``gear`` (input, the large wheel) drives ``pinion``.
 
     ``position`` (m) is the centre of ``gear`` in the housing plane and ``angle`` (rad) the
@@ -577,14 +610,12 @@ def parallel_stage(gear: Gear, pinion: Gear, *, mesh_stiffness: float, backlash:
     operating centre distance of profile-shifted gears, the mesh then at its operating pressure
     angle ``cos(alpha_w) = (r_b,gear + r_b,pinion) / a`` (default: the standard one).
     """
-    v.choice(f"{name}.dofs", dofs, DOF_LEVELS)
     g = _gear(gear, f"{name}.gear", "gear", dofs)
     p = _gear(pinion, f"{name}.pinion", "pinion", dofs)
     if g.internal or p.internal:
         raise ModelError(f"{name}", "gears of a parallel stage must be external")
     _same_tooth_system(f"{name}.pinion", g, p)
-    angle = v.number(f"{name}.angle", angle, "rad")
-    x0, y0 = (v.number(f"{name}.position", c, "m") for c in position)
+    x0, y0 = position
     alt = _alternation(f"{name}.mesh_alternation", mesh_alternation)
     centre, alpha_w = _centre(name, centre_distance, g, p, {
         "mesh": (g.base_radius + p.base_radius, "gear + pinion")})

@@ -9,6 +9,8 @@ from __future__ import annotations
 import dataclasses
 import math
 
+from . import builders
+from . import spec as sp
 from .bearing import Bearing
 from .components import DOF_LEVELS, Gear, RigidBody
 from .mesh import Mesh
@@ -110,27 +112,10 @@ PLANETARY = Table("planetary stage (`[planetary_stage]` or a `[[stages]]` entry)
     Field("transmission_error", "any", doc="[[amplitude_m, phase_deg], ...] harmonics of the "
           "mesh frequency, or {sun_planet = [...], ring_planet = [...]}")),
     "A planetary stage, carrier input.")
-PARALLEL = Table("parallel stage (`[parallel_stage]` or a `[[stages]]` entry)", (
-    *_STAGE_COMMON,
-    Field("position", "vector", "m", lengths=(2,), default=(0.0, 0.0),
-          doc="[x, y] centre of the gear"),
-    Field("angle", "angle", "rad", degrees=True, default=0.0,
-          doc="direction from the gear to the pinion"),
-    _CENTRE,
-    Field("gear", "table", default=REQUIRED, doc="the large input wheel (gear table)"),
-    Field("pinion", "table", default=REQUIRED, doc="gear table"),
-    Field("gear_bearing", "support", doc="gear to the housing"),
-    Field("pinion_bearing", "support", doc="pinion to the housing")),
-    "A parallel (speed-increasing) stage.")
-GEAR_PAIR = Table("gear_pair", (
-    dataclasses.replace(_DOFS, default="torsional"),
-    _mesh("mesh_stiffness", "stiffness", doc="mesh stiffness on the line of action"),
-    _mesh("backlash", "backlash", default=REQUIRED), _mesh("mesh_damping", "damping"),
-    Field("bearing", "support", doc="both wheels to the ground (required unless torsional)"),
-    Field("pinion", "table", default=REQUIRED, doc="gear table"),
-    Field("wheel", "table", default=REQUIRED, doc="gear table"),
-    _ALTERNATION),
-    "Two external gears on bearings.")
+PARALLEL = sp.file_table(builders.parallel_stage,
+                         "parallel stage (`[parallel_stage]` or a `[[stages]]` entry)",
+                         "A parallel (speed-increasing) stage.", before=_STAGE_COMMON[:3])
+GEAR_PAIR = sp.file_table(builders.gear_pair, "gear_pair", "Two external gears on bearings.")
 LIN_PARKER = Table("lin_parker_stage", (
     Field("n_planets", "integer", low=1, high=32, default=REQUIRED, doc="number of planets"),
     Field("pressure_angle_deg", "per_mesh", "deg", default=REQUIRED,

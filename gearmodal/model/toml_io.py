@@ -140,6 +140,7 @@ from pathlib import Path
 from ..errors import ModelError
 from . import builders
 from . import file_schema as fs
+from . import spec as sp
 from . import validate as v
 from .components import Gear, RigidBody
 from .dump import read_components
@@ -429,35 +430,37 @@ def _degrees_pairs(path: str, value, table: bool = False):
     return value
 
 
+def _convert(path: str):
+    """What a builder takes for a file value (:func:`gearmodal.model.spec.arguments`): a gear
+    for a gear table, a support checked by its schema."""
+    def convert(entry, value):
+        where = _join(path, entry.field.key)
+        if entry.gear:
+            return _gear(where, value, entry.field.key)
+        if entry.field.type == "support":
+            return _support(where, value)
+        return value
+    return convert
+
+
 def _parallel(path: str, value, in_drivetrain: bool = False) -> Model:
     t = _stage_table(fs.PARALLEL, path, value, in_drivetrain)
     _stage_type(path, t, "parallel")
-    gear = _gear(_join(path, "gear"), t["gear"], "gear")
-    pinion = _gear(_join(path, "pinion"), t["pinion"], "pinion")
-    supports = {key: _support(_join(path, key), t[key])
-                for key in ("gear_bearing", "pinion_bearing") if key in t}
-    renames = [(r"^parallel_stage(\.|$)", ""), *_mesh_renames(False)]
+    build = builders.parallel_stage
+    kwargs = sp.arguments(build, t, _convert(path))  # (their errors are the file's already)
+    renames = [(r"^parallel_stage(\.|$)", ""), *sp.renames(build), *_mesh_renames(False)]
     with _at(path, renames):
-        return builders.parallel_stage(
-            gear, pinion, mesh_stiffness=t["mesh_stiffness"], backlash=t["backlash"],
-            mesh_damping=t["mesh_damping"], dofs=t["dofs"], position=tuple(t["position"]),
-            angle=t["angle"], mesh_alternation=t["mesh_alternation"],
-            centre_distance=t.get("centre_distance"), **supports)
+        return build(**kwargs)
 
 
 def _gear_pair(path: str, value) -> Model:
     t = fs.GEAR_PAIR.read(path, value)
-    pinion = _gear(_join(path, "pinion"), t["pinion"], "pinion")
-    wheel = _gear(_join(path, "wheel"), t["wheel"], "wheel")
-    bearing = _support(_join(path, "bearing"), t["bearing"]) if "bearing" in t else None
-    renames = [(r"^gear_pair(\.|$)", ""), *_mesh_renames(False),
-               (r"^bearing_stiffness(\.|$)", r"bearing\1"),
+    build = builders.gear_pair
+    kwargs = sp.arguments(build, t, _convert(path))  # (their errors are the file's already)
+    renames = [(r"^gear_pair(\.|$)", ""), *sp.renames(build), *_mesh_renames(False),
                (r"^(pinion|wheel)_bearing(\.|$)", r"bearing\2")]
     with _at(path, renames):
-        return builders.gear_pair(pinion, wheel, t["mesh_stiffness"], t["backlash"],
-                                  mesh_damping=t["mesh_damping"], dofs=t["dofs"],
-                                  bearing_stiffness=bearing,
-                                  mesh_alternation=t["mesh_alternation"])
+        return build(**kwargs)
 
 
 def _lin_parker(path: str, value) -> Model:
