@@ -340,7 +340,7 @@ API_CASES = [
      r"planetary_stage\.n_planets = 7: planets cannot be equally spaced"),
     ("stage-dofs", lambda: _stage(dofs="3d"), r"planetary_stage\.dofs = '3d'"),
     ("stage-backlash-negative", lambda: _stage(backlash=-1e-4),
-     r"sun_planet1\.backlash = -0\.0001: must be >= 0"),
+     r"planetary_stage\.backlash = -0\.0001: must be >= 0"),
     ("pair-mesh-stiffness-negative",
      lambda: builders.gear_pair(_gear(teeth=20, name="p"), _gear(teeth=40, name="w"), -2e8, 0.0),
      r"gear_pair\.mesh_stiffness = -200000000\.0: must be >= 0"),

@@ -24,7 +24,7 @@ from .model import Model
 _CENTRAL = ("carrier", "ring", "sun")
 
 # -- the builders' parameters as their files have them (gearmodal.model.spec) ----------------
-_MF = Mesh.SCHEMA.by_key()
+_MF, _RB = Mesh.SCHEMA.by_key(), RigidBody.SCHEMA.by_key()
 _DOFS = sp.key("choice", choices=DOF_LEVELS, doc="DOF level of the bodies")
 _MESH_K = sp.like(_MF["stiffness"], doc="mesh stiffness on the line of action")
 _BACKLASH = sp.like(_MF["backlash"])
@@ -428,15 +428,46 @@ def _needs_contact_ratio(field: str, spec: dict) -> None:
                          "is computed for standard gears without profile shift")
 
 
-def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
-                    carrier_mass: float, carrier_inertia: float,
-                    mesh_stiffness, backlash: float = 0.0, mesh_damping: float = 0.0,
-                    planet_bearing=None, carrier_bearing=None, sun_support=None,
-                    ring_support=None, dofs: str = "planar", planet_angles=None,
-                    carrier_inertia_diametral: float | None = None,
-                    name: str = "planetary_stage", mesh_alternation=None, pin_errors=None,
-                    tooth_thickness_errors=None, runout=None,
-                    transmission_error=None, centre_distance: float | None = None) -> Model:
+@sp.checked
+def planetary_stage(
+        sun: Annotated[Gear, sp.GEAR], planet: Annotated[Gear, sp.GEAR],
+        ring: Annotated[Gear, sp.RING], *,
+        n_planets: Annotated[int, sp.key(
+            "integer", low=1, high=v.MAX_PLANETS, doc="number of planets",
+            note="wind-turbine gearboxes have 3 to 7")] = 3,
+        carrier_mass: Annotated[float, sp.like(_RB["mass"], file="carrier.mass")],
+        carrier_inertia: Annotated[float, sp.like(_RB["inertia"], file="carrier.inertia")],
+        mesh_stiffness: Annotated[object, sp.like(_MF["stiffness"], type="per_mesh",
+                                                  doc="mesh stiffness on the line of action")],
+        backlash: Annotated[float, _BACKLASH] = 0.0,
+        mesh_damping: Annotated[float, _MESH_C] = 0.0,
+        planet_bearing: Annotated[object, sp.key(
+            "support", doc="each planet on its carrier pin")] = None,
+        carrier_bearing: Annotated[object, sp.key("support", doc="carrier to the housing")] = None,
+        sun_support: Annotated[object, sp.key("support", doc="sun to the housing")] = None,
+        ring_support: Annotated[object, sp.key("support", doc="ring to the housing")] = None,
+        dofs: Annotated[str, _DOFS] = "planar",
+        planet_angles: Annotated[object, sp.key(
+            "vector", "rad", degrees=True, doc="planet positions (default equally spaced)")]
+        = None,
+        carrier_inertia_diametral: Annotated[float | None, sp.like(
+            _RB["inertia_diametral"], file="carrier.inertia_diametral")] = None,
+        name: str = "planetary_stage",
+        mesh_alternation: Annotated[object, _ALTERNATION] = None,
+        pin_errors: Annotated[object, sp.key(
+            "pairs", "m", limits="gap",
+            doc="per planet [radial, tangential] carrier pinhole position error")] = None,
+        tooth_thickness_errors: Annotated[object, sp.key(
+            "vector", "m", limits="gap",
+            doc="per planet tooth thickness error on the line of action (positive: "
+                "thicker)")] = None,
+        runout: Annotated[object, sp.key(
+            "table", phase_deg=True, doc="{sun = [e_m, phase_deg], ring = ..., carrier = ...}: "
+            "eccentricity turning with the body")] = None,
+        transmission_error: Annotated[object, sp.key(
+            "any", phase_deg=True, doc="[[amplitude_m, phase_deg], ...] harmonics of the mesh "
+            "frequency, or {sun_planet = [...], ring_planet = [...]}")] = None,
+        centre_distance: Annotated[float | None, _CENTRE] = None) -> Model:
     """A planetary stage with carrier input and the ring held (the wind-turbine layout).
 
     Parameters
@@ -481,8 +512,6 @@ def planetary_stage(sun: Gear, planet: Gear, ring: Gear, *, n_planets: int = 3,
     radial, ``eta`` tangential). The carrier is the input (speed ratio 1), the sun turns at
     ``1 + z_ring/z_sun``. A positive carrier torque closes the front flanks.
     """
-    v.choice(f"{name}.dofs", dofs, DOF_LEVELS)
-    n_planets = v.planets(f"{name}.n_planets", n_planets)
     s = _gear(sun, f"{name}.sun", "sun", dofs)
     p = _gear(planet, f"{name}.planet", "planet", dofs)
     r = _gear(ring, f"{name}.ring", "ring", dofs)

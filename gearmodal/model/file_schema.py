@@ -61,7 +61,6 @@ BODY = Table("body (rotor, generator, housing)", (
     _MASS, _INERTIA, _DIAMETRAL,
     dataclasses.replace(_DOFS, doc="DOF level (default torsional; the housing: planar)")),
     "A rigid body that is not a gear.")
-CARRIER = Table("carrier", (_MASS, _INERTIA, _DIAMETRAL), "A planetary stage's carrier.")
 SHAFT = Table("shaft (main_shaft, hss_shaft)", (
     Field("stiffness", "number", "N m/rad", **_NONNEG, default=REQUIRED,
           doc="torsional stiffness", limits="stiffness"),
@@ -85,33 +84,15 @@ _STAGE_COMMON = (
           doc="mesh stiffness on the line of action"),
     _M["backlash"], _mesh("mesh_damping", "damping"),
     _ALTERNATION)
-PLANETARY = Table("planetary stage (`[planetary_stage]` or a `[[stages]]` entry)", (
-    *_STAGE_COMMON,
-    Field("n_planets", "integer", low=1, high=32, default=3, doc="number of planets"),
-    Field("planet_angles", "vector", "rad", degrees=True,
-          doc="planet positions (default equally spaced)"),
-    (_CENTRE := Field("centre_distance", "number", "m", low=0.0, low_open=True,
-                      doc="operating centre distance of profile-shifted gears (default: the "
-                          "standard one); each mesh at its operating pressure angle")),
-    Field("carrier", "table", default=REQUIRED, doc="the carrier (carrier table)"),
-    Field("sun", "table", default=REQUIRED, doc="gear table"),
-    Field("planet", "table", default=REQUIRED, doc="gear table"),
-    Field("ring", "table", default=REQUIRED, doc="gear table"),
-    Field("planet_bearing", "support", doc="each planet on its carrier pin"),
-    Field("carrier_bearing", "support", doc="carrier to the housing"),
-    Field("sun_support", "support", doc="sun to the housing"),
-    Field("ring_support", "support", doc="ring to the housing"),
-    *(_ERRORS := (
-        Field("pin_errors", "pairs", "m", limits="gap",
-              doc="per planet [radial, tangential] carrier pinhole position error"),
-        Field("tooth_thickness_errors", "vector", "m", limits="gap",
-              doc="per planet tooth thickness error on the line of action (positive: "
-                  "thicker)"))),
-    Field("runout", "table", doc="{sun = [e_m, phase_deg], ring = ..., carrier = ...}: "
-          "eccentricity turning with the body"),
-    Field("transmission_error", "any", doc="[[amplitude_m, phase_deg], ...] harmonics of the "
-          "mesh frequency, or {sun_planet = [...], ring_planet = [...]}")),
-    "A planetary stage, carrier input.")
+PLANETARY = sp.file_table(
+    builders.planetary_stage, "planetary stage (`[planetary_stage]` or a `[[stages]]` entry)",
+    "A planetary stage, carrier input.", before=_STAGE_COMMON[:3],
+    groups={"carrier": Field("carrier", "table", default=REQUIRED,
+                             doc="the carrier (carrier table)")})
+CARRIER = sp.group_table(builders.planetary_stage, "carrier", "carrier",
+                         "A planetary stage's carrier.")
+_ERRORS = tuple(e.field for e in sp.entries(builders.planetary_stage)
+                if e.param in ("pin_errors", "tooth_thickness_errors"))
 PARALLEL = sp.file_table(builders.parallel_stage,
                          "parallel stage (`[parallel_stage]` or a `[[stages]]` entry)",
                          "A parallel (speed-increasing) stage.", before=_STAGE_COMMON[:3])

@@ -139,7 +139,8 @@ class Field:
             x = v.integer(path, value, minimum=int(self.low) if self.low is not None
                           else -(2**62))
             if self.high is not None and x > self.high:
-                raise ModelError(path, f"= {x}: must be an integer <= {self.high:g}")
+                raise ModelError(path, f"= {x}: must be an integer <= {self.high:g}"
+                                 + (f" ({self.note})" if self.note else ""))
             if self.limits:
                 v.plausible(path, x, self.limits)
             return x

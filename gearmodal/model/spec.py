@@ -21,24 +21,28 @@ from dataclasses import dataclass
 
 from .schema import REQUIRED, Field, Table
 
-__all__ = ["GEAR", "Key", "arguments", "checked", "entries", "file_key", "file_table", "key",
-           "like", "renames"]
+__all__ = ["GEAR", "RING", "Key", "arguments", "checked", "entries", "file_key", "file_table",
+           "group_table", "key", "like", "renames"]
 
 
 @dataclass(frozen=True)
 class Key:
     """A builder parameter's file entry (the metadata of its annotation): its ``field`` (the
-    key filled in from the parameter's name, or ``file`` when the file names it otherwise),
-    and ``gear``: a gear table in the file for a :class:`~gearmodal.Gear` in the API."""
+    key filled in from the parameter's name, or ``file`` when the file names it otherwise:
+    ``"carrier.mass"`` is key ``mass`` of the table ``carrier``); ``gear``: a gear table in
+    the file for a :class:`~gearmodal.Gear` in the API (``internal``: a ring); ``phase_deg``:
+    ``[a, phase]`` pairs whose phases the file gives in degrees."""
 
     field: Field
     file: str = ""
     gear: bool = False
+    internal: bool = False
+    phase_deg: bool = False
 
 
-def key(type: str, unit: str = "", *, file: str = "", **kw) -> Key:
+def key(type: str, unit: str = "", *, file: str = "", phase_deg: bool = False, **kw) -> Key:
     """A :class:`Key` with a new field (``Field`` keywords)."""
-    return Key(Field("", type, unit, **kw), file)
+    return Key(Field("", type, unit, **kw), file, phase_deg=phase_deg)
 
 
 def like(field: Field, *, file: str = "", **changes) -> Key:
@@ -48,6 +52,8 @@ def like(field: Field, *, file: str = "", **changes) -> Key:
 
 #: a gear wheel: a gear table in the file
 GEAR = Key(Field("", "table", doc="gear table"), gear=True)
+#: an internal gear wheel (a ring): a gear table in the file
+RING = Key(Field("", "table", doc="gear table"), gear=True, internal=True)
 #: the types whose API values :func:`checked` checks by their field (the others: the builder)
 CHECKED_TYPES = ("number", "integer", "angle", "choice", "vector")
 
@@ -55,11 +61,22 @@ CHECKED_TYPES = ("number", "integer", "angle", "choice", "vector")
 @dataclass(frozen=True)
 class Entry:
     """One parameter of a builder as its file has it: ``field.key`` the file key (without a
-    degrees suffix), ``field.default`` the signature's."""
+    degrees suffix) in the table ``group`` (``""``: the builder's own table),
+    ``field.default`` the signature's."""
 
     param: str
     field: Field
-    gear: bool
+    key: Key
+    group: str = ""
+
+    @property
+    def gear(self) -> bool:
+        return self.key.gear
+
+    @property
+    def path(self) -> str:
+        """Where the file gives it, from the builder's table (``carrier.mass``)."""
+        return f"{self.group}.{self.field.file_key}" if self.group else self.field.file_key
 
 
 @functools.cache
@@ -77,40 +94,60 @@ def entries(fn) -> tuple[Entry, ...]:
             continue
         k = keys[0]
         default = REQUIRED if p.default is inspect.Parameter.empty else p.default
-        field = dataclasses.replace(k.field, key=k.file or name,
+        group, _, file_key = (k.file or name).rpartition(".")
+        field = dataclasses.replace(k.field, key=file_key,
                                     default=k.field.default if default is None else default)
-        out.append(Entry(name, field, k.gear))
+        out.append(Entry(name, field, k, group))
     return tuple(out)
 
 
-def file_table(fn, title: str, doc: str, before: tuple = (), after: tuple = ()) -> Table:
-    """The file table of builder ``fn``: ``before``, its parameters' fields, ``after``."""
-    return Table(title, (*before, *(e.field for e in entries(fn)), *after), doc)
+def file_table(fn, title: str, doc: str, before: tuple = (), after: tuple = (),
+               groups: dict | None = None) -> Table:
+    """The file table of builder ``fn``: ``before``, its parameters' fields in signature
+    order (a group's, ``carrier.mass``..., as one table field ``groups[name]``, where its
+    first member stands), ``after``."""
+    fields, seen = [], set()
+    for e in entries(fn):
+        if not e.group:
+            fields.append(e.field)
+        elif e.group not in seen:
+            seen.add(e.group)
+            fields.append(groups[e.group])
+    return Table(title, (*before, *fields, *after), doc)
+
+
+def group_table(fn, group: str, title: str, doc: str) -> Table:
+    """The table ``group`` of builder ``fn``'s file (its parameters ``file="<group>.<key>"``)."""
+    return Table(title, tuple(e.field for e in entries(fn) if e.group == group), doc)
 
 
 def file_key(fn, param: str) -> str:
-    """The file key of parameter ``param`` of ``fn`` (with ``_deg`` for an angle the file
-    gives in degrees); ``param`` itself when it is not in the file."""
+    """Where the file gives parameter ``param`` of ``fn`` (with ``_deg`` for an angle the file
+    gives in degrees; ``carrier.mass`` in a group); ``param`` itself when it is not there."""
     for e in entries(fn):
         if e.param == param:
-            return e.field.file_key
+            return e.path
     return param
 
 
-def arguments(fn, table: dict, convert) -> dict:
+def arguments(fn, table: dict, convert, groups: dict | None = None) -> dict:
     """The keyword arguments of builder ``fn`` from its file ``table`` as read
-    (:meth:`Table.read`): each value under its parameter's name, as ``convert(entry, value)``
-    makes it (a gear table a gear); keys absent with no default are left out (the builder's
-    default)."""
-    return {e.param: convert(e, table[e.field.key]) for e in entries(fn)
-            if e.field.key in table}
+    (:meth:`Table.read`; ``groups``: its group tables as read, by name): each value under its
+    parameter's name, as ``convert(entry, value)`` makes it (a gear table a gear); keys absent
+    with no default are left out (the builder's default)."""
+    out = {}
+    for e in entries(fn):
+        t = groups[e.group] if e.group else table
+        if e.field.key in t:
+            out[e.param] = convert(e, t[e.field.key])
+    return out
 
 
 def renames(fn) -> list[tuple[str, str]]:
     """``(pattern, replacement)`` pairs from ``fn``'s parameter names to their file keys where
     they differ (its errors name its parameters)."""
-    return [(rf"^{e.param}(\.|\[|$)", rf"{e.field.file_key}\1") for e in entries(fn)
-            if e.field.file_key != e.param]
+    return [(rf"^{e.param}(\.|\[|$)", rf"{e.path}\1") for e in entries(fn)
+            if e.path != e.param]
 
 
 def checked(fn):

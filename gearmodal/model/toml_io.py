@@ -379,36 +379,20 @@ def _planetary(path: str, value, in_drivetrain: bool = False) -> Model:
     t = _stage_table(fs.PLANETARY, path, value, in_drivetrain)
     _stage_type(path, t, "planetary")
     carrier = fs.CARRIER.read(_join(path, "carrier"), t["carrier"])
-    sun = _gear(_join(path, "sun"), t["sun"], "sun")
-    planet = _gear(_join(path, "planet"), t["planet"], "planet")
-    ring = _gear(_join(path, "ring"), t["ring"], "ring", internal=True)
-    k = _per_mesh(_join(path, "mesh_stiffness"), t["mesh_stiffness"])
-    angles = t.get("planet_angles")
-    n = t["n_planets"]
-    if angles is None and (sun.teeth + ring.teeth) % n and (
+    build = builders.planetary_stage
+    kwargs = sp.arguments(build, t, _convert(path), {"carrier": carrier})
+    sun, planet, ring = kwargs["sun"], kwargs["planet"], kwargs["ring"]
+    n = kwargs["n_planets"]
+    if kwargs.get("planet_angles") is None and (sun.teeth + ring.teeth) % n and (
             "centre_distance" in t or ring.teeth == sun.teeth + 2 * planet.teeth):
         raise _err(_join(path, "n_planets"), f"= {n}: planets cannot be equally spaced, (sun + "
                    f"ring teeth) = {sun.teeth + ring.teeth} is not divisible by {n}; give "
                    "planet_angles_deg")
-    supports = {key: _support(_join(path, key), t[key])
-                for key in ("planet_bearing", "carrier_bearing", "sun_support", "ring_support")
-                if key in t}
-    renames = [(r"^planetary_stage(\.|$)", ""), *_mesh_renames(isinstance(k, dict)),
-               (r"^planet\d+_bearing(\.|$)", r"planet_bearing\1"),
-               (r"^planet_angles(\[|$)", r"planet_angles_deg\1")]
+    renames = [(r"^planetary_stage(\.|$)", ""), *sp.renames(build),
+               *_mesh_renames(isinstance(kwargs["mesh_stiffness"], dict)),
+               (r"^planet\d+_bearing(\.|$)", r"planet_bearing\1")]
     with _at(path, renames):
-        return builders.planetary_stage(
-            sun, planet, ring, n_planets=n, carrier_mass=carrier["mass"],
-            carrier_inertia=carrier["inertia"],
-            carrier_inertia_diametral=carrier.get("inertia_diametral"),
-            mesh_stiffness=k, backlash=t["backlash"], mesh_damping=t["mesh_damping"],
-            dofs=t["dofs"], planet_angles=angles, mesh_alternation=t["mesh_alternation"],
-            pin_errors=t.get("pin_errors"),
-            tooth_thickness_errors=t.get("tooth_thickness_errors"),
-            runout=_degrees_pairs(_join(path, "runout"), t.get("runout"), table=True),
-            transmission_error=_degrees_pairs(_join(path, "transmission_error"),
-                                              t.get("transmission_error")),
-            centre_distance=t.get("centre_distance"), **supports)
+        return build(**kwargs)
 
 
 def _degrees_pairs(path: str, value, table: bool = False):
@@ -432,13 +416,18 @@ def _degrees_pairs(path: str, value, table: bool = False):
 
 def _convert(path: str):
     """What a builder takes for a file value (:func:`gearmodal.model.spec.arguments`): a gear
-    for a gear table, a support checked by its schema."""
+    for a gear table, a support or a value per mesh checked by its schema, ``[a, phase]``
+    pairs with their phases in radians."""
     def convert(entry, value):
-        where = _join(path, entry.field.key)
+        where = _join(path, entry.path)
         if entry.gear:
-            return _gear(where, value, entry.field.key)
+            return _gear(where, value, entry.field.key, internal=entry.key.internal)
         if entry.field.type == "support":
             return _support(where, value)
+        if entry.field.type == "per_mesh":
+            return _per_mesh(where, value)
+        if entry.key.phase_deg:
+            return _degrees_pairs(where, value, table=entry.field.type == "table")
         return value
     return convert
 
