@@ -10,6 +10,7 @@ exceeds the backlash.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 from typing import Annotated
 
@@ -20,6 +21,7 @@ from .bearing import Bearing, Shaft
 from .components import DOF_LEVELS, Frame, Gear, RigidBody
 from .mesh import Mesh
 from .model import Model
+from .schema import REQUIRED, Field, Table
 
 _CENTRAL = ("carrier", "ring", "sun")
 
@@ -32,6 +34,29 @@ _MESH_C = sp.like(_MF["damping"])
 _ALTERNATION = sp.key("alternation", default=False,
                       doc="true, or a table of contact_ratio, stiffness_ratio, phase: the mesh "
                           "stiffness alternates between single and double tooth-pair contact")
+_PIN_ERRORS = sp.key("pairs", "m", limits="gap",
+                     doc="per planet [radial, tangential] carrier pinhole position error")
+_THICKNESS_ERRORS = sp.key("vector", "m", limits="gap",
+                           doc="per planet tooth thickness error on the line of action "
+                               "(positive: thicker)")
+_BODIES4 = (*_CENTRAL, "planet")
+#: Lin & Parker's tables (:func:`lin_parker_stage`): a value per body, per central body, per
+#: mesh kind, and the pressure angles per mesh kind (in degrees in a file)
+LIN_PARKER_BODIES = Table("lin_parker_stage per body", tuple(
+    Field(b, "number", default=REQUIRED, doc=b) for b in _BODIES4),
+    "A value per body (`mass`, `inertia_over_r2`, `bearing`).")
+LIN_PARKER_CENTRAL = Table("lin_parker_stage per central body", tuple(
+    Field(b, "number", default=REQUIRED, doc=b) for b in _CENTRAL),
+    "A value per central body (`torsional`).")
+PER_MESH = Table("per mesh (sun_planet, ring_planet)", (
+    dataclasses.replace(_MF["stiffness"], key="sun_planet", doc="sun-planet meshes"),
+    dataclasses.replace(_MF["stiffness"], key="ring_planet", doc="ring-planet meshes")),
+    "A value per mesh kind.")
+PER_MESH_ANGLE = Table("lin_parker_stage pressure angles", tuple(
+    Field(k, "number", "deg", low=math.degrees(1e-6), high=60.0, high_open=True,
+          default=REQUIRED, doc=f"{k.replace('_', '-')} meshes", deg_floor=10.0)
+    for k in ("sun_planet", "ring_planet")),
+    "Lin & Parker's pressure angles per mesh kind, in degrees.")
 _CENTRE = sp.key("number", "m", low=0.0, low_open=True,
                  doc="operating centre distance of profile-shifted gears (default: the "
                      "standard one); each mesh at its operating pressure angle")
@@ -187,10 +212,32 @@ def gear_pair(pinion: Annotated[Gear, sp.GEAR], wheel: Annotated[Gear, sp.GEAR],
     return m.check()
 
 
-def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing: dict,
-                     torsional: dict, mesh: dict, pressure_angle, planet_angles=None, *,
-                     backlash: float = 0.0, mesh_damping: float = 0.0, pin_errors=None,
-                     tooth_thickness_errors=None) -> Model:
+@sp.checked
+def lin_parker_stage(
+        n_planets: Annotated[int, sp.key(
+            "integer", low=1, high=v.MAX_PLANETS, doc="number of planets",
+            note="wind-turbine gearboxes have 3 to 7")],
+        mass: Annotated[dict, sp.key(
+            "table", "kg", doc="carrier, ring, sun, planet", table=LIN_PARKER_BODIES)],
+        inertia_over_r2: Annotated[dict, sp.key(
+            "table", "kg", doc="carrier, ring, sun, planet", table=LIN_PARKER_BODIES)],
+        bearing: Annotated[dict, sp.key(
+            "table", "N/m", doc="carrier, ring, sun, planet", table=LIN_PARKER_BODIES)],
+        torsional: Annotated[dict, sp.key(
+            "table", "N/m", doc="carrier, ring, sun (on u = r theta)",
+            table=LIN_PARKER_CENTRAL)],
+        mesh: Annotated[dict, sp.key(
+            "table", "N/m", doc="sun_planet, ring_planet", table=PER_MESH)],
+        pressure_angle: Annotated[object, sp.key(
+            "per_mesh", "deg", file="pressure_angle_deg", table=PER_MESH_ANGLE,
+            doc="pressure angle, a number or {sun_planet, ring_planet}")],
+        planet_angles: Annotated[object, sp.key(
+            "vector", "rad", degrees=True, doc="planet positions (default equally spaced)")]
+        = None, *,
+        backlash: Annotated[float, _BACKLASH] = 0.0,
+        mesh_damping: Annotated[float, _MESH_C] = 0.0,
+        pin_errors: Annotated[object, _PIN_ERRORS] = None,
+        tooth_thickness_errors: Annotated[object, _THICKNESS_ERRORS] = None) -> Model:
     """Lin & Parker (1999) planar planetary stage in the frame rotating with the carrier.
 
     Parameters (SI, Lin & Parker's convention)
@@ -216,7 +263,6 @@ def lin_parker_stage(n_planets: int, mass: dict, inertia_over_r2: dict, bearing:
     the rotational coordinate ``r theta`` (m). Front flanks follow Lin & Parker's mesh
     deflections ``delta_sn``, ``delta_rn`` (compressed by a positive sun rotation).
     """
-    n_planets = v.planets("lin_parker_stage.n_planets", n_planets)
     for label, table, keys in (("mass", mass, (*_CENTRAL, "planet")),
                                ("inertia_over_r2", inertia_over_r2, (*_CENTRAL, "planet")),
                                ("bearing", bearing, (*_CENTRAL, "planet")),
@@ -454,13 +500,8 @@ def planetary_stage(
             _RB["inertia_diametral"], file="carrier.inertia_diametral")] = None,
         name: str = "planetary_stage",
         mesh_alternation: Annotated[object, _ALTERNATION] = None,
-        pin_errors: Annotated[object, sp.key(
-            "pairs", "m", limits="gap",
-            doc="per planet [radial, tangential] carrier pinhole position error")] = None,
-        tooth_thickness_errors: Annotated[object, sp.key(
-            "vector", "m", limits="gap",
-            doc="per planet tooth thickness error on the line of action (positive: "
-                "thicker)")] = None,
+        pin_errors: Annotated[object, _PIN_ERRORS] = None,
+        tooth_thickness_errors: Annotated[object, _THICKNESS_ERRORS] = None,
         runout: Annotated[object, sp.key(
             "table", phase_deg=True, doc="{sun = [e_m, phase_deg], ring = ..., carrier = ...}: "
             "eccentricity turning with the body")] = None,

@@ -7,13 +7,11 @@ file-format reference page (``docs/file-format.md``) both come from here. The co
 from __future__ import annotations
 
 import dataclasses
-import math
 
 from . import builders
 from . import spec as sp
 from .bearing import Bearing
 from .components import DOF_LEVELS, Gear, RigidBody
-from .mesh import Mesh
 from .schema import REQUIRED, Field, Table
 
 MODEL_TYPES = ("drivetrain", "gear_pair", "planetary_stage", "parallel_stage",
@@ -27,19 +25,9 @@ def _required(f: Field) -> Field:
 
 _NONNEG = {"low": 0.0}
 # the components' own fields (their types and ranges stated once, in the component's SCHEMA)
-_G, _R, _M = Gear.SCHEMA.by_key(), RigidBody.SCHEMA.by_key(), Mesh.SCHEMA.by_key()
+_G, _R = Gear.SCHEMA.by_key(), RigidBody.SCHEMA.by_key()
 _DOFS = Field("dofs", "choice", choices=DOF_LEVELS, doc="DOF level of the bodies")
 _MASS, _INERTIA, _DIAMETRAL = _R["mass"], _R["inertia"], _R["inertia_diametral"]
-
-
-def _mesh(key: str, api: str, **changes) -> Field:
-    """A stage's mesh field ``key`` from the mesh's own field ``api``."""
-    return dataclasses.replace(_M[api], key=key, **changes)
-
-
-_ALTERNATION = Field("mesh_alternation", "alternation", default=False,
-                     doc="true, or a table of contact_ratio, stiffness_ratio, phase: the mesh "
-                         "stiffness alternates between single and double tooth-pair contact")
 
 MODEL = Table("model", (
     Field("type", "choice", choices=MODEL_TYPES, default=REQUIRED,
@@ -73,62 +61,28 @@ SUPPORT = Table("support (a bearing given as a table)", (
     _B["facets"], _B["ramps"]),
     "A support given as a table; a number instead is a translational stiffness in N/m on x "
     "and y (and z at `full`). A planet bearing's x/y are radial/tangential.")
-_STAGE_COMMON = (
+#: a stage table's keys that are not its builder's: what a drivetrain's [[stages]] says of it
+_STAGE_FILE = (
     Field("type", "choice", choices=STAGE_TYPES, doc="stage type (in `[[stages]]`: required)"),
     Field("name", "name", doc="DOF name prefix in a drivetrain (default `stage<k>`)"),
     Field("coupling_stiffness", "number", "N m/rad", **_NONNEG, limits="stiffness",
           doc="torsional coupling to the previous stage's output (not on the first stage; "
-              "default 1e9)"),
-    dataclasses.replace(_DOFS, default="planar"),
-    _mesh("mesh_stiffness", "stiffness", type="per_mesh",
-          doc="mesh stiffness on the line of action"),
-    _M["backlash"], _mesh("mesh_damping", "damping"),
-    _ALTERNATION)
+              "default 1e9)"))
 PLANETARY = sp.file_table(
     builders.planetary_stage, "planetary stage (`[planetary_stage]` or a `[[stages]]` entry)",
-    "A planetary stage, carrier input.", before=_STAGE_COMMON[:3],
+    "A planetary stage, carrier input.", before=_STAGE_FILE,
     groups={"carrier": Field("carrier", "table", default=REQUIRED,
                              doc="the carrier (carrier table)")})
 CARRIER = sp.group_table(builders.planetary_stage, "carrier", "carrier",
                          "A planetary stage's carrier.")
-_ERRORS = tuple(e.field for e in sp.entries(builders.planetary_stage)
-                if e.param in ("pin_errors", "tooth_thickness_errors"))
 PARALLEL = sp.file_table(builders.parallel_stage,
                          "parallel stage (`[parallel_stage]` or a `[[stages]]` entry)",
-                         "A parallel (speed-increasing) stage.", before=_STAGE_COMMON[:3])
+                         "A parallel (speed-increasing) stage.", before=_STAGE_FILE)
 GEAR_PAIR = sp.file_table(builders.gear_pair, "gear_pair", "Two external gears on bearings.")
-LIN_PARKER = Table("lin_parker_stage", (
-    Field("n_planets", "integer", low=1, high=32, default=REQUIRED, doc="number of planets"),
-    Field("pressure_angle_deg", "per_mesh", "deg", default=REQUIRED,
-          doc="pressure angle, a number or {sun_planet, ring_planet}"),
-    Field("planet_angles", "vector", "rad", degrees=True,
-          doc="planet positions (default equally spaced)"),
-    _M["backlash"], _mesh("mesh_damping", "damping"),
-    Field("mass", "table", "kg", default=REQUIRED, doc="carrier, ring, sun, planet"),
-    Field("inertia_over_r2", "table", "kg", default=REQUIRED, doc="carrier, ring, sun, planet"),
-    Field("bearing", "table", "N/m", default=REQUIRED, doc="carrier, ring, sun, planet"),
-    Field("torsional", "table", "N/m", default=REQUIRED,
-          doc="carrier, ring, sun (on u = r theta)"),
-    Field("mesh", "table", "N/m", default=REQUIRED, doc="sun_planet, ring_planet"),
-    *_ERRORS),
-    "Lin & Parker's (1999) planar stage in their notation.")
-PER_MESH_ANGLE = Table("lin_parker_stage pressure angles", (
-    Field("sun_planet", "number", "deg", low=math.degrees(1e-6), high=90.0, high_open=True,
-          default=REQUIRED, doc="sun-planet meshes", deg_floor=10.0),
-    Field("ring_planet", "number", "deg", low=math.degrees(1e-6), high=90.0, high_open=True,
-          default=REQUIRED, doc="ring-planet meshes", deg_floor=10.0)),
-    "Lin & Parker's pressure angles per mesh kind, in degrees.")
-PER_MESH = Table("per mesh (sun_planet, ring_planet)", (
-    _mesh("sun_planet", "stiffness", doc="sun-planet meshes"),
-    _mesh("ring_planet", "stiffness", doc="ring-planet meshes")),
-    "A value per mesh kind.")
-_BODIES4 = ("carrier", "ring", "sun", "planet")
-LIN_PARKER_BODIES = Table("lin_parker_stage per body", tuple(
-    Field(b, "number", default=REQUIRED, doc=b) for b in _BODIES4),
-    "A value per body (`mass`, `inertia_over_r2`, `bearing`).")
-LIN_PARKER_CENTRAL = Table("lin_parker_stage per central body", tuple(
-    Field(b, "number", default=REQUIRED, doc=b) for b in _BODIES4[:3]),
-    "A value per central body (`torsional`).")
+LIN_PARKER = sp.file_table(builders.lin_parker_stage, "lin_parker_stage",
+                          "Lin & Parker's (1999) planar stage in their notation.")
+PER_MESH, PER_MESH_ANGLE = builders.PER_MESH, builders.PER_MESH_ANGLE
+LIN_PARKER_BODIES, LIN_PARKER_CENTRAL = builders.LIN_PARKER_BODIES, builders.LIN_PARKER_CENTRAL
 #: the sections of each model type: section -> required
 SECTIONS = {
     "drivetrain": {"model": True, "rotor": True, "main_shaft": True, "shaft_bending": False,

@@ -31,18 +31,21 @@ class Key:
     key filled in from the parameter's name, or ``file`` when the file names it otherwise:
     ``"carrier.mass"`` is key ``mass`` of the table ``carrier``); ``gear``: a gear table in
     the file for a :class:`~gearmodal.Gear` in the API (``internal``: a ring); ``phase_deg``:
-    ``[a, phase]`` pairs whose phases the file gives in degrees."""
+    ``[a, phase]`` pairs whose phases the file gives in degrees; ``table``: the table that
+    checks a table value's keys (one number for every key: its first field)."""
 
     field: Field
     file: str = ""
     gear: bool = False
     internal: bool = False
     phase_deg: bool = False
+    table: Table | None = None
 
 
-def key(type: str, unit: str = "", *, file: str = "", phase_deg: bool = False, **kw) -> Key:
+def key(type: str, unit: str = "", *, file: str = "", phase_deg: bool = False,
+        table: Table | None = None, **kw) -> Key:
     """A :class:`Key` with a new field (``Field`` keywords)."""
-    return Key(Field("", type, unit, **kw), file, phase_deg=phase_deg)
+    return Key(Field("", type, unit, **kw), file, phase_deg=phase_deg, table=table)
 
 
 def like(field: Field, *, file: str = "", **changes) -> Key:

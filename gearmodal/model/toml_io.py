@@ -424,6 +424,14 @@ def _convert(path: str):
             return _gear(where, value, entry.field.key, internal=entry.key.internal)
         if entry.field.type == "support":
             return _support(where, value)
+        if entry.key.table is not None:  # its keys checked (one number: every key's)
+            tab = entry.key.table
+            read = tab.read(where, value) if isinstance(value, dict) \
+                else tab.fields[0].read(where, value)
+            if entry.field.unit != "deg":
+                return value  # (the builder checks the ranges)
+            return {k: math.radians(a) for k, a in read.items()} if isinstance(read, dict) \
+                else math.radians(read)
         if entry.field.type == "per_mesh":
             return _per_mesh(where, value)
         if entry.key.phase_deg:
@@ -454,26 +462,14 @@ def _gear_pair(path: str, value) -> Model:
 
 def _lin_parker(path: str, value) -> Model:
     t = fs.LIN_PARKER.read(path, value)
-    pa, pa_path = t["pressure_angle_deg"], _join(path, "pressure_angle_deg")
-    if isinstance(pa, dict):
-        pa_rad = {k: math.radians(a) for k, a in fs.PER_MESH_ANGLE.read(pa_path, pa).items()}
-    else:
-        pa_rad = math.radians(fs.PER_MESH_ANGLE.by_key()["sun_planet"].read(pa_path, pa))
-    for key, table in (("mass", fs.LIN_PARKER_BODIES), ("inertia_over_r2", fs.LIN_PARKER_BODIES),
-                       ("bearing", fs.LIN_PARKER_BODIES), ("torsional", fs.LIN_PARKER_CENTRAL),
-                       ("mesh", fs.PER_MESH)):
-        table.read(_join(path, key), t[key])  # its keys and numbers; the builder, the ranges
-    renames = [(r"^lin_parker_stage(\.|$)", ""),
+    build = builders.lin_parker_stage
+    kwargs = sp.arguments(build, t, _convert(path))
+    renames = [(r"^lin_parker_stage(\.|$)", ""), *sp.renames(build),
                (r"^(carrier|ring|sun|planet)\d*\.mass$", r"mass.\1"),
                (r"^(sun|ring)_planet\d+\.backlash$", "backlash"),
-               (r"^(sun|ring)_planet\d+\.damping$", "mesh_damping"),
-               (r"^planet_angles(\[|$)", r"planet_angles_deg\1")]
+               (r"^(sun|ring)_planet\d+\.damping$", "mesh_damping")]
     with _at(path, renames):
-        return builders.lin_parker_stage(
-            t["n_planets"], t["mass"], t["inertia_over_r2"], t["bearing"], t["torsional"],
-            t["mesh"], pa_rad, t.get("planet_angles"), backlash=t["backlash"],
-            mesh_damping=t["mesh_damping"], pin_errors=t.get("pin_errors"),
-            tooth_thickness_errors=t.get("tooth_thickness_errors"))
+        return build(**kwargs)
 
 
 def _drivetrain(doc: dict) -> Model:
