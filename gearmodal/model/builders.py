@@ -57,6 +57,11 @@ PER_MESH_ANGLE = Table("lin_parker_stage pressure angles", tuple(
           default=REQUIRED, doc=f"{k.replace('_', '-')} meshes", deg_floor=10.0)
     for k in ("sun_planet", "ring_planet")),
     "Lin & Parker's pressure angles per mesh kind, in degrees.")
+#: a torsional shaft's stiffness and damping (a drivetrain's main and high-speed shafts)
+SHAFT_K = Field("stiffness", "number", "N m/rad", low=0.0, default=REQUIRED,
+                doc="torsional stiffness", limits="stiffness")
+SHAFT_C = Field("damping", "number", "N m s/rad", low=0.0, default=0.0,
+                doc="torsional damping", limits="damping")
 _CENTRE = sp.key("number", "m", low=0.0, low_open=True,
                  doc="operating centre distance of profile-shifted gears (default: the "
                      "standard one); each mesh at its operating pressure angle")
@@ -709,12 +714,24 @@ def parallel_stage(gear: Annotated[Gear, sp.GEAR], pinion: Annotated[Gear, sp.GE
     return m.check()
 
 
-def drivetrain(rotor: RigidBody, stages: list, *, main_shaft_stiffness: float,
-               main_shaft_damping: float = 0.0, couplings=None,
-               generator: RigidBody | None = None, hss_stiffness: float | None = None,
-               hss_damping: float = 0.0, housing: RigidBody | None = None,
-               suspension=None, shaft_bending=None, name: str = "drivetrain",
-               stage_names=None) -> Model:
+@sp.checked
+def drivetrain(
+        rotor: Annotated[RigidBody, sp.body("the rotor (input)", "torsional")], stages: list, *,
+        main_shaft_stiffness: Annotated[float, sp.like(SHAFT_K, file="main_shaft.stiffness")],
+        main_shaft_damping: Annotated[float, sp.like(SHAFT_C, file="main_shaft.damping")]
+        = 0.0,
+        couplings=None,
+        generator: Annotated[RigidBody | None, sp.body("the generator rotor", "torsional")]
+        = None,
+        hss_stiffness: Annotated[float | None, sp.like(SHAFT_K, file="hss_shaft.stiffness")]
+        = None,
+        hss_damping: Annotated[float, sp.like(SHAFT_C, file="hss_shaft.damping")] = 0.0,
+        housing: Annotated[RigidBody | None, sp.body("the gearbox housing", "planar")] = None,
+        suspension: Annotated[object, sp.key("support", doc="the housing to the ground")]
+        = None,
+        shaft_bending: Annotated[object, sp.key(
+            "support", doc="the first stage's input to the ground (the main bearing)")] = None,
+        name: str = "drivetrain", stage_names=None) -> Model:
     """Chain a rotor, gear stages, a generator and a housing on its suspension.
 
     Parameters

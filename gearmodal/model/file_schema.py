@@ -49,12 +49,8 @@ BODY = Table("body (rotor, generator, housing)", (
     _MASS, _INERTIA, _DIAMETRAL,
     dataclasses.replace(_DOFS, doc="DOF level (default torsional; the housing: planar)")),
     "A rigid body that is not a gear.")
-SHAFT = Table("shaft (main_shaft, hss_shaft)", (
-    Field("stiffness", "number", "N m/rad", **_NONNEG, default=REQUIRED,
-          doc="torsional stiffness", limits="stiffness"),
-    Field("damping", "number", "N m s/rad", **_NONNEG, default=0.0, doc="torsional damping",
-          limits="damping")),
-    "A torsional shaft.")
+SHAFT = sp.group_table(builders.drivetrain, "main_shaft", "shaft (main_shaft, hss_shaft)",
+                       "A torsional shaft.")
 _B = Bearing.SCHEMA.by_key()
 SUPPORT = Table("support (a bearing given as a table)", (
     _required(_B["stiffness"]), _B["damping"], _B["clearance"], _B["clearance_shape"],
@@ -85,9 +81,8 @@ PER_MESH, PER_MESH_ANGLE = builders.PER_MESH, builders.PER_MESH_ANGLE
 LIN_PARKER_BODIES, LIN_PARKER_CENTRAL = builders.LIN_PARKER_BODIES, builders.LIN_PARKER_CENTRAL
 #: the sections of each model type: section -> required
 SECTIONS = {
-    "drivetrain": {"model": True, "rotor": True, "main_shaft": True, "shaft_bending": False,
-                   "stages": True, "generator": False, "hss_shaft": False, "housing": False,
-                   "suspension": False},
+    "drivetrain": sp.sections(builders.drivetrain, {"model": True},
+                              {"stages": True}),
     "gear_pair": {"model": True, "gear_pair": True},
     "planetary_stage": {"model": True, "planetary_stage": True},
     "parallel_stage": {"model": True, "parallel_stage": True},

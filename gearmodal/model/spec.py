@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 from .schema import REQUIRED, Field, Table
 
-__all__ = ["GEAR", "RING", "Key", "arguments", "checked", "entries", "file_key", "file_table",
-           "group_table", "key", "like", "renames"]
+__all__ = ["GEAR", "RING", "Key", "arguments", "body", "checked", "entries", "file_key",
+           "file_table", "group_table", "key", "like", "renames", "sections"]
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,9 @@ class Key:
     ``"carrier.mass"`` is key ``mass`` of the table ``carrier``); ``gear``: a gear table in
     the file for a :class:`~gearmodal.Gear` in the API (``internal``: a ring); ``phase_deg``:
     ``[a, phase]`` pairs whose phases the file gives in degrees; ``table``: the table that
-    checks a table value's keys (one number for every key: its first field)."""
+    checks a table value's keys (one number for every key: its first field); ``body``: a
+    body table in the file for a :class:`~gearmodal.RigidBody` in the API, of this default
+    DOF level."""
 
     field: Field
     file: str = ""
@@ -40,6 +42,7 @@ class Key:
     internal: bool = False
     phase_deg: bool = False
     table: Table | None = None
+    body: str = ""
 
 
 def key(type: str, unit: str = "", *, file: str = "", phase_deg: bool = False,
@@ -57,6 +60,11 @@ def like(field: Field, *, file: str = "", **changes) -> Key:
 GEAR = Key(Field("", "table", doc="gear table"), gear=True)
 #: an internal gear wheel (a ring): a gear table in the file
 RING = Key(Field("", "table", doc="gear table"), gear=True, internal=True)
+
+
+def body(doc: str, dofs: str) -> Key:
+    """A rigid body: a body table in the file (``dofs`` its default DOF level)."""
+    return Key(Field("", "table", doc=doc), body=dofs)
 #: the types whose API values :func:`checked` checks by their field (the others: the builder)
 CHECKED_TYPES = ("number", "integer", "angle", "choice", "vector")
 
@@ -98,8 +106,9 @@ def entries(fn) -> tuple[Entry, ...]:
         k = keys[0]
         default = REQUIRED if p.default is inspect.Parameter.empty else p.default
         group, _, file_key = (k.file or name).rpartition(".")
-        field = dataclasses.replace(k.field, key=file_key,
-                                    default=k.field.default if default is None else default)
+        if default is None and k.field.default is not REQUIRED:  # the file's default, or none
+            default = k.field.default
+        field = dataclasses.replace(k.field, key=file_key, default=default)
         out.append(Entry(name, field, k, group))
     return tuple(out)
 
@@ -122,6 +131,17 @@ def file_table(fn, title: str, doc: str, before: tuple = (), after: tuple = (),
 def group_table(fn, group: str, title: str, doc: str) -> Table:
     """The table ``group`` of builder ``fn``'s file (its parameters ``file="<group>.<key>"``)."""
     return Table(title, tuple(e.field for e in entries(fn) if e.group == group), doc)
+
+
+def sections(fn, before: dict, after: dict) -> dict:
+    """``{section: required}`` of a builder whose file is a document of sections
+    (:func:`gearmodal.drivetrain`): ``before``, then each parameter's table (its group's, or
+    its own), required when a member is, then ``after``."""
+    out = dict(before)
+    for e in entries(fn):
+        sec = e.group or e.field.key
+        out[sec] = out.get(sec, False) or e.field.required
+    return {**out, **after}
 
 
 def file_key(fn, param: str) -> str:

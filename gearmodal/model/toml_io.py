@@ -422,6 +422,8 @@ def _convert(path: str):
         where = _join(path, entry.path)
         if entry.gear:
             return _gear(where, value, entry.field.key, internal=entry.key.internal)
+        if entry.key.body:
+            return _body(where, value, entry.field.key, entry.key.body)
         if entry.field.type == "support":
             return _support(where, value)
         if entry.key.table is not None:  # its keys checked (one number: every key's)
@@ -473,10 +475,8 @@ def _lin_parker(path: str, value) -> Model:
 
 
 def _drivetrain(doc: dict) -> Model:
-    rotor = _body("rotor", doc["rotor"], "rotor", "torsional")
-    shaft = fs.SHAFT.read("main_shaft", doc["main_shaft"])
-    bending = _support("shaft_bending", doc["shaft_bending"]) if "shaft_bending" in doc \
-        else None
+    chain = builders.drivetrain
+    shafts = {"main_shaft": fs.SHAFT.read("main_shaft", doc["main_shaft"]), "hss_shaft": {}}
     stages_doc = doc["stages"]
     if not isinstance(stages_doc, list) or not all(isinstance(s, dict) for s in stages_doc):
         raise _err("stages", f"expected an array of tables [[stages]], got "
@@ -504,35 +504,20 @@ def _drivetrain(doc: dict) -> Model:
             couplings.append(st["coupling_stiffness"])
         elif k > 0:
             couplings.append(1e9)
-    generator = hss = None
-    if "generator" in doc:
-        generator = _body("generator", doc["generator"], "generator", "torsional")
-        if "hss_shaft" not in doc:
-            raise _err("hss_shaft", "missing section [hss_shaft] (stiffness in N m/rad), "
-                                    "required with [generator]")
+    # the sections that go together, each with the other
+    for have, need, what in (("generator", "hss_shaft", "stiffness in N m/rad"),
+                             ("housing", "suspension", "stiffness table in N/m")):
+        if have in doc and need not in doc:
+            raise _err(need, f"missing section [{need}] ({what}), required with [{have}]")
+        if need in doc and have not in doc:
+            raise _err(need, f"given without [{have}]")
     if "hss_shaft" in doc:
-        if generator is None:
-            raise _err("hss_shaft", "given without [generator]")
-        hss = fs.SHAFT.read("hss_shaft", doc["hss_shaft"])
-    housing = suspension = None
-    if "housing" in doc:
-        housing = _body("housing", doc["housing"], "housing", "planar")
-        if "suspension" not in doc:
-            raise _err("suspension", "missing section [suspension] (stiffness table in N/m), "
-                                     "required with [housing]")
-    if "suspension" in doc:
-        if housing is None:
-            raise _err("suspension", "given without [housing]")
-        suspension = _support("suspension", doc["suspension"])
-    renames = [(r"^drivetrain(\.|$)", ""),
+        shafts["hss_shaft"] = fs.SHAFT.read("hss_shaft", doc["hss_shaft"])
+    kwargs = sp.arguments(chain, doc, _convert(""), shafts)
+    renames = [(r"^drivetrain(\.|$)", ""), *sp.renames(chain),
                (r"^coupling(\d+)\.stiffness$", r"stages[\1].coupling_stiffness")]
     with _at("", renames):
-        return builders.drivetrain(
-            rotor, stages, main_shaft_stiffness=shaft["stiffness"],
-            main_shaft_damping=shaft.get("damping", 0.0), couplings=couplings,
-            generator=generator, hss_stiffness=hss["stiffness"] if hss else None,
-            hss_damping=hss.get("damping", 0.0) if hss else 0.0, housing=housing,
-            suspension=suspension, shaft_bending=bending, stage_names=names)
+        return chain(stages=stages, couplings=couplings, stage_names=names, **kwargs)
 
 
 # -- document -------------------------------------------------------------------------------
