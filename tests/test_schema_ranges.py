@@ -5,7 +5,10 @@ import math
 
 import pytest
 
+import gearmodal as gm
 from gearmodal import Bearing, Gear, Mesh, ModelError, RigidBody
+from gearmodal.model import file_schema as fs
+from gearmodal.model import spec
 
 BASE = {
     Mesh: dict(name="m", gear_a="a", gear_b="b", stiffness=1e8),
@@ -63,3 +66,52 @@ def test_an_angle_given_in_degrees_gets_the_radians_hint():
         Gear(**{**BASE[Gear], "pressure_angle": 20})
     m = Mesh(**{**BASE[Mesh], "pressure_angle": math.radians(20), "base_radii": [0.1, 0.2]})
     assert m.base_radii == (0.1, 0.2)  # a vector is held as a tuple whatever was given
+
+
+# -- builders: each parameter declared once, in the signature ---------------------------------
+def _stage_args():
+    sun = Gear(21, 0.01, math.radians(20), mass=80.0, inertia=0.45)
+    planet = Gear(39, 0.01, math.radians(20), mass=140.0, inertia=3.6)
+    ring = Gear(99, 0.01, math.radians(20), mass=620.0, inertia=190.0, internal=True)
+    return {gm.planetary_stage: dict(sun=sun, planet=planet, ring=ring, carrier_mass=1000.0,
+                                     carrier_inertia=110.0, mesh_stiffness=1e9),
+            gm.parallel_stage: dict(gear=Gear(82, 0.01, math.radians(20), mass=400.0,
+                                              inertia=30.0),
+                                    pinion=Gear(23, 0.01, math.radians(20), mass=20.0,
+                                                inertia=0.2), mesh_stiffness=1e9)}
+
+
+BUILDER_CASES = [(b, e, bad) for b in (gm.planetary_stage, gm.parallel_stage)
+                 for e in spec.entries(b) if e.field.type in ("number", "integer")
+                 for bad in _outside(e.field)]
+
+
+@pytest.mark.parametrize("builder, entry, bad", BUILDER_CASES,
+                         ids=[f"{b.__name__}.{e.param}={x!r}" for b, e, x in BUILDER_CASES])
+def test_a_builder_and_its_file_refuse_the_same_values(builder, entry, bad):
+    """The builder's signature states each parameter's range once: the API call and the file
+    table made from the signature both refuse a value just outside it."""
+    args = _stage_args()[builder]
+    with pytest.raises(ModelError) as api:
+        builder(**{**args, entry.param: bad})
+    assert api.value.field == f"{builder.__name__}.{entry.param}"
+    table = {gm.planetary_stage: fs.PLANETARY, gm.parallel_stage: fs.PARALLEL}[builder]
+    field = (fs.CARRIER if entry.group else table).by_key()[entry.field.key]
+    assert field == entry.field  # the file's field is the signature's
+    with pytest.raises(ModelError):
+        field.read("file.key", bad)
+
+
+def test_every_builder_argument_reaches_it_from_its_file():
+    """The loader calls each builder with every parameter its file table holds (no
+    hand-written list to fall behind the signature)."""
+    import inspect
+
+    for builder, table in ((gm.gear_pair, fs.GEAR_PAIR), (gm.planetary_stage, fs.PLANETARY),
+                           (gm.parallel_stage, fs.PARALLEL),
+                           (gm.lin_parker_stage, fs.LIN_PARKER)):
+        keys = {f.key for f in table.fields}
+        params = set(inspect.signature(builder).parameters)
+        for e in spec.entries(builder):
+            assert e.param in params
+            assert (e.group or e.field.key) in keys

@@ -2,13 +2,16 @@
 signature, with its file field as the annotation's metadata::
 
     def parallel_stage(gear: Annotated[Gear, GEAR], pinion: Annotated[Gear, GEAR], *,
-                       mesh_stiffness: Annotated[float, like(MESH["stiffness"])], ...)
+                       mesh_stiffness: Annotated[float, like(Mesh.SCHEMA.by_key()["stiffness"])],
+                       angle: Annotated[float, key("angle", "rad", degrees=True)] = 0.0, ...)
 
 From the signature come the builder's file table (:func:`file_table`: keys, types, units,
 ranges, defaults; the reference page ``docs/file-format.md`` is written from it), the check of
-its arguments in the API (:func:`checked`: the same fields, the same ranges) and the loader's
+its arguments in the API (:func:`checked`: the same fields, the same ranges), the loader's
 call (:func:`arguments`: the file table's values as the builder's keyword arguments, each
-under its parameter's name).
+under its parameter's name) and the file path of an error the builder raises naming its
+argument (:func:`renames`). A builder's file writes no builder tables (``gm.dumps`` writes
+components), so there is no writer to derive.
 """
 
 from __future__ import annotations
@@ -65,6 +68,8 @@ RING = Key(Field("", "table", doc="gear table"), gear=True, internal=True)
 def body(doc: str, dofs: str) -> Key:
     """A rigid body: a body table in the file (``dofs`` its default DOF level)."""
     return Key(Field("", "table", doc=doc), body=dofs)
+
+
 #: the types whose API values :func:`checked` checks by their field (the others: the builder)
 CHECKED_TYPES = ("number", "integer", "angle", "choice", "vector")
 
