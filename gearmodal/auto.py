@@ -60,6 +60,7 @@ import pandas as pd
 
 from .errors import ModelError, StoreError
 from .saved import load_run
+from .single import one_run
 from .store import Store
 from .summary import summarize
 
@@ -290,7 +291,7 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
                 summ["n_events"] = int(summ["n_events"])
         else:
             t0 = time.process_time()
-            res = _rung_scene(scene, st).simulate()
+            res = one_run(_rung_scene(scene, st))
             cpu = time.process_time() - t0
             summ = summarize(res)
             if disk is not None:
@@ -326,7 +327,7 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     if chosen is not None and result is None:  # loaded from the store: its saved result
         result = disk.result(chosen) if disk is not None else None
         if result is None:  # a store without it: run it again
-            result = _rung_scene(scene, settings).simulate()
+            result = one_run(_rung_scene(scene, settings))
         again = summarize(result)
         if difference(again, summaries[chosen], quantities) > 1e-12:
             raise StoreError("store", f"= {str(store)!r}: rung {chosen} run again differs "

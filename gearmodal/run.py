@@ -1,10 +1,10 @@
 """One path from a scene to a run, and the protocol every run result follows (issue 37).
 
 :func:`run` is the one place that knows the three kinds of run a scene makes: the exact step
-ladder (``method = "auto"``, :mod:`gearmodal.auto`), the turbine with its gearbox
-(:func:`gearmodal.turbine.simulate_drivetrain`) and a gearbox alone
-(:func:`gearmodal.simulate`). :meth:`gearmodal.scene.Scene.simulate`, ``gearmodal simulate``
-and :func:`gearmodal.sweep` go through it.
+ladder (``method = "auto"``, :mod:`gearmodal.auto`), the turbine with its gearbox and a gearbox
+alone (:func:`gearmodal.single.one_run`, which the ladder's rungs run too).
+:meth:`gearmodal.scene.Scene.simulate`, ``gearmodal simulate`` and :func:`gearmodal.sweep` go
+through it.
 
 Whatever ran, the result follows :class:`RunResult`: ``gearbox`` (the
 :class:`~gearmodal.SimulationResult`), ``turbine`` (the turbine's side or None), ``choice``
@@ -21,8 +21,7 @@ from typing import Any, Protocol, runtime_checkable
 
 from .auto import LEVELS, FidelityChoice, choose, chosen_result
 from .errors import ModelError
-from .integrate import simulate
-from .turbine import simulate_drivetrain
+from .single import one_run
 
 
 @runtime_checkable
@@ -104,10 +103,4 @@ def run(scene, progress: Callable[[int, int], None] | None = None, out=None,
     if store is not None:
         raise ModelError("store", "is the step ladder's (method = 'auto'); give out=DIR to "
                          "stream a run")
-    if scene.turbine is not None:
-        return simulate_drivetrain(scene.turbine, scene.wind, scene.model, scene.t_end,
-                                   dt=scene.dt, method=scene.method, progress=progress,
-                                   out=out, **scene.drivetrain, **scene.options)
-    return simulate(scene.model, scene.t_end, dt=scene.dt, loads=scene.loads,
-                    q0=scene.initial_q(), v0=scene.v0, method=scene.method,
-                    speed_rpm=scene.speed_rpm, out=out, **scene.options)
+    return one_run(scene, progress, out)
