@@ -65,6 +65,7 @@ import numpy as np
 from .errors import ModelError, unknown
 from .integrate import MAX_STEPS
 from .integrate.loads import Harmonic
+from .integrate.stepper import Stepper
 from .io import read_loads, shaft_loads
 from .model import validate as v
 from .model.dump import dumps as dump_model
@@ -255,6 +256,23 @@ class Scene:
         (constant memory; not with ``method = "auto"``, whose rungs have their own store)."""
 
         return run(self, progress=progress, out=out)
+
+    def stepper(self, **kwargs) -> Stepper:
+        """A :class:`~gearmodal.Stepper` of this gearbox scene (the co-simulation API): its
+        model, ``dt``, method and options, ``speed_rpm`` and initial state (``start =
+        "equilibrium"`` included); its loads' values at time 0 as the loads the host sets from
+        then on (a wave or series is the host's to follow). ``kwargs`` (``drive``,
+        ``outputs``, ``reference``...) go to the stepper and override the scene's."""
+        if self.turbine is not None:
+            raise ModelError("scene.turbine", "a turbine scene runs its own loop "
+                             "(scene.simulate()); a stepper takes a gearbox scene")
+        if self.method == "auto":
+            raise ModelError("scene.method", "= 'auto' chooses among whole runs; give a "
+                             "method (exact, newmark, scipy) to step a scene")
+        args = {"dt": self.dt, "method": self.method, "speed_rpm": self.speed_rpm,
+                "loads": self.loads_at(0.0), "q0": self.initial_q(), "v0": self.v0,
+                **self.options}
+        return Stepper(self.model, **{**args, **kwargs})
 
     def loads_at(self, t: float) -> dict:
         """Every load's value at time ``t`` (s), N or N m: a number as it is, a Series on its

@@ -365,21 +365,14 @@ class Stepper:
         ``dt``, method and options, ``speed_rpm`` and initial state (``start = "equilibrium"``
         included); its loads' values at time 0 as the loads the host sets from then on (a
         wave or series is the host's to follow). ``kwargs`` (``drive``, ``outputs``,
-        ``reference``...) go to the stepper and override the scene's."""
-        from ..scene import Scene
-
-        if not isinstance(scene, Scene):
-            raise TypeError(f"expected a gearmodal.scene.Scene, got {type(scene).__name__}")
-        if scene.turbine is not None:
-            raise ModelError("scene.turbine", "a turbine scene runs its own loop "
-                             "(scene.simulate()); a stepper takes a gearbox scene")
-        if scene.method == "auto":
-            raise ModelError("scene.method", "= 'auto' chooses among whole runs; give a "
-                             "method (exact, newmark, scipy) to step a scene")
-        args = {"dt": scene.dt, "method": scene.method, "speed_rpm": scene.speed_rpm,
-                "loads": scene.loads_at(0.0), "q0": scene.initial_q(), "v0": scene.v0,
-                **scene.options}
-        return cls(scene.model, **{**args, **kwargs})
+        ``reference``...) go to the stepper and override the scene's. The scene makes it
+        (:meth:`gearmodal.scene.Scene.stepper`: the scene knows its own fields)."""
+        try:
+            make = scene.stepper
+        except AttributeError:
+            raise TypeError(f"expected a gearmodal.scene.Scene, got "
+                            f"{type(scene).__name__}") from None
+        return make(**kwargs)
 
     # -- the host's calls -------------------------------------------------------------------
 
