@@ -275,14 +275,19 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
         raise ModelError("coarsest", f"= {coarsest!r}: must be a factor >= 1")
     if not isinstance(levels, int) or isinstance(levels, bool) or not 3 <= levels <= 12:
         raise ModelError("levels", f"= {levels!r}: must be an integer from 3 to 12")
+    # every use of the scene first (its rungs' settings and scenes, its fingerprint), then
+    # the store and the runs
     base = _settings(scene)
-    disk = None if store is None else _Store(store, {"scene_sha256": fingerprint(scene),
-                                                      "coarsest": float(coarsest)})
+    rung_settings = [_rung_settings(scene, base, coarsest / 2.0**level)
+                     for level in range(levels)]
+    rung_scenes = [_rung_scene(scene, st) for st in rung_settings]
+    ident = None if store is None else {"scene_sha256": fingerprint(scene),
+                                        "coarsest": float(coarsest)}
+    disk = None if store is None else _Store(store, ident)
     rows, results, summaries = [], [], []
     chosen = None
     for level in range(levels):
-        f = coarsest / 2.0**level
-        st = _rung_settings(scene, base, f)
+        st = rung_settings[level]
         got = None if disk is None else disk.load(level, st)
         if got is not None:
             res, cpu = None, float(got["cpu_s"])
@@ -291,7 +296,7 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
                 summ["n_events"] = int(summ["n_events"])
         else:
             t0 = time.process_time()
-            res = one_run(_rung_scene(scene, st))
+            res = one_run(rung_scenes[level])
             cpu = time.process_time() - t0
             summ = summarize(res)
             if disk is not None:
@@ -327,7 +332,7 @@ def choose(scene, tol: float = DEFAULT_TOL, *, coarsest: float = 4.0, levels: in
     if chosen is not None and result is None:  # loaded from the store: its saved result
         result = disk.result(chosen) if disk is not None else None
         if result is None:  # a store without it: run it again
-            result = one_run(_rung_scene(scene, settings))
+            result = one_run(rung_scenes[chosen])
         again = summarize(result)
         if difference(again, summaries[chosen], quantities) > 1e-12:
             raise StoreError("store", f"= {str(store)!r}: rung {chosen} run again differs "
