@@ -137,7 +137,7 @@ def test_the_fidelity_ladder_returns_the_stored_rung_without_running_it(tmp_path
     def no_run(*a, **k):
         raise AssertionError("a stored rung was run again")
 
-    monkeypatch.setattr(auto, "_rung_scene", no_run)
+    monkeypatch.setattr(auto, "one_run", no_run)  # what runs a rung
     again = gm.choose_fidelity(sc, 0.05, store=tmp_path)
     assert again.table.cached.all() and again.rung == first.rung
     _same_frame(again.result.forces, first.result.forces)
