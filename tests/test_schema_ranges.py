@@ -115,3 +115,18 @@ def test_every_builder_argument_reaches_it_from_its_file():
         for e in spec.entries(builder):
             assert e.param in params
             assert (e.group or e.field.key) in keys
+
+
+def test_arrays_and_tuples_are_taken_where_a_list_is_expected():
+    """An API caller's numpy array or tuple for a vector argument is its numbers (as before the
+    schema checked them)."""
+    import numpy as np
+
+    args = _stage_args()[gm.planetary_stage]
+    a = gm.planetary_stage(**args, planet_angles=np.radians([0.0, 120.0, 240.0]))
+    b = gm.planetary_stage(**args, planet_angles=(0.0, 2 * math.pi / 3, 4 * math.pi / 3))
+    assert a.bodies["planet2"].position == pytest.approx(b.bodies["planet2"].position)
+    g = gm.parallel_stage(**_stage_args()[gm.parallel_stage], position=np.array([0.1, 0.2]))
+    assert g.bodies["gear"].position[:2] == (0.1, 0.2)
+    assert RigidBody(name="r", mass=1.0, inertia=1.0, position=np.zeros(3)).position \
+        == (0.0, 0.0, 0.0)

@@ -19,6 +19,8 @@ import numbers
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from ..errors import ModelError
 from . import validate as v
 
@@ -229,6 +231,8 @@ class Field:
         if value is None and self.default is None:
             return None
         t = self.type
+        if t in ("vector", "pairs") and isinstance(value, np.ndarray):
+            value = value.tolist()  # (an API caller's array: its numbers as a list)
         if t in ("vector", "pairs") and isinstance(value, tuple):
             value = [list(x) if isinstance(x, tuple) else x for x in value]
         if t == "angle" and self.low is not None and self.high is not None \
