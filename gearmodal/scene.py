@@ -263,16 +263,20 @@ class Scene:
         "equilibrium"`` included); its loads' values at time 0 as the loads the host sets from
         then on (a wave or series is the host's to follow). ``kwargs`` (``drive``,
         ``outputs``, ``reference``...) go to the stepper and override the scene's."""
+        return Stepper(self.model, **{**self.stepper_settings(), **kwargs})
+
+    def stepper_settings(self) -> dict:
+        """The :class:`~gearmodal.Stepper` keywords this gearbox scene gives (:meth:`stepper`);
+        a turbine scene or ``method = "auto"`` is refused by name."""
         if self.turbine is not None:
             raise ModelError("scene.turbine", "a turbine scene runs its own loop "
                              "(scene.simulate()); a stepper takes a gearbox scene")
         if self.method == "auto":
             raise ModelError("scene.method", "= 'auto' chooses among whole runs; give a "
                              "method (exact, newmark, scipy) to step a scene")
-        args = {"dt": self.dt, "method": self.method, "speed_rpm": self.speed_rpm,
+        return {"dt": self.dt, "method": self.method, "speed_rpm": self.speed_rpm,
                 "loads": self.loads_at(0.0), "q0": self.initial_q(), "v0": self.v0,
                 **self.options}
-        return Stepper(self.model, **{**args, **kwargs})
 
     def loads_at(self, t: float) -> dict:
         """Every load's value at time ``t`` (s), N or N m: a number as it is, a Series on its

@@ -130,3 +130,58 @@ def test_arrays_and_tuples_are_taken_where_a_list_is_expected():
     assert g.bodies["gear"].position[:2] == (0.1, 0.2)
     assert RigidBody(name="r", mass=1.0, inertia=1.0, position=np.zeros(3)).position \
         == (0.0, 0.0, 0.0)
+
+
+def test_what_the_schema_checks_takes_what_the_api_took():
+    """Found in review: a body kind with its own schema, an element kind with a stage it does
+    not list, a stepper subclass, iterables and numpy booleans, a builder's TypeError."""
+    from dataclasses import dataclass
+
+    import numpy as np
+
+    from gearmodal.model.schema import NAME, Field, Table
+
+    @dataclass(eq=False, kw_only=True)
+    class Disk(RigidBody):
+        radius: float = 0.1
+
+    b = RigidBody.SCHEMA.by_key()
+    Disk.SCHEMA = Table("disk", (NAME, b["mass"], b["inertia"], b["dofs"],
+                                 Field("radius", "number", "m", default=0.1)))
+    assert Disk(name="d", mass=1.0, inertia=0.1).inertia_diametral == 0.05
+    angles = [0.0, 2 * math.pi / 3, 4 * math.pi / 3]
+    args = _stage_args()[gm.planetary_stage]
+    a = gm.planetary_stage(**args, planet_angles=(x for x in angles))
+    assert a.bodies["planet3"].position == pytest.approx(
+        gm.planetary_stage(**args, planet_angles=angles).bodies["planet3"].position)
+    assert Mesh(**BASE[Mesh], internal=np.bool_(True)).internal is True
+    with pytest.raises(TypeError, match=r"^planetary_stage\(\) .*'carrier_mass'"):
+        gm.planetary_stage(args["sun"], args["planet"], args["ring"], carrier_inertia=1.0,
+                           mesh_stiffness=1e9)
+
+
+def test_a_kind_keeps_its_stage_through_a_merge_and_a_stepper_subclass_its_class():
+    from gearmodal.integrate.stepper import Stepper
+    from gearmodal.scene import load_scene
+
+    class MyStepper(Stepper):
+        pass
+
+    scene = load_scene("studies/scenes/gear_rattle.toml")
+    assert type(MyStepper.from_scene(scene)) is MyStepper
+    assert type(scene.stepper()) is Stepper
+
+    from dataclasses import dataclass
+
+    from gearmodal.model.element import Element
+    from gearmodal.model.schema import NAME, REQUIRED, Field, Table
+
+    @dataclass
+    class Stop(Element):  # a kind whose schema does not list its stage
+        name: str
+        a: str
+        stage: str = ""
+        SCHEMA = Table("stops", (NAME, Field("a", "name", default=REQUIRED)))
+
+    moved = Stop("s", "pinion").renamed(lambda n: f"stage1.{n}", "stage1")
+    assert (moved.name, moved.a, moved.stage) == ("stage1.s", "stage1.pinion", "stage1")

@@ -365,14 +365,14 @@ class Stepper:
         ``dt``, method and options, ``speed_rpm`` and initial state (``start = "equilibrium"``
         included); its loads' values at time 0 as the loads the host sets from then on (a
         wave or series is the host's to follow). ``kwargs`` (``drive``, ``outputs``,
-        ``reference``...) go to the stepper and override the scene's. The scene makes it
-        (:meth:`gearmodal.scene.Scene.stepper`: the scene knows its own fields)."""
+        ``reference``...) go to the stepper and override the scene's
+        (:meth:`gearmodal.scene.Scene.stepper_settings`: the scene knows its own fields)."""
         try:
-            make = scene.stepper
+            settings = scene.stepper_settings
         except AttributeError:
             raise TypeError(f"expected a gearmodal.scene.Scene, got "
                             f"{type(scene).__name__}") from None
-        return make(**kwargs)
+        return cls(scene.model, **{**settings(), **kwargs})
 
     # -- the host's calls -------------------------------------------------------------------
 

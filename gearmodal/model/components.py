@@ -139,7 +139,7 @@ class Body:
         f = self._label()
         if self.name:
             v.name(f"{type(self).__name__}.name", self.name)
-        schema = type(self).SCHEMA  # types and ranges: the one statement of them
+        schema = Body.SCHEMA  # types and ranges of every body's fields: their one statement
         schema.check(self, ("mass", "inertia"), f)
         if self.inertia_diametral is None:
             self.inertia_diametral = self.inertia / 2.0

@@ -37,7 +37,7 @@ class Element:
         for key, f in keys.items():
             if f.type == "name" and key != "stage" and getattr(self, key, None):
                 setattr(new, key, p(getattr(self, key)))
-        if "stage" in keys:
+        if hasattr(new, "stage"):  # (a kind's structure field, listed in its schema or not)
             new.stage = p(self.stage) if self.stage else prefix
         return new
 

@@ -231,10 +231,16 @@ class Field:
         if value is None and self.default is None:
             return None
         t = self.type
-        if t in ("vector", "pairs") and isinstance(value, np.ndarray):
-            value = value.tolist()  # (an API caller's array: its numbers as a list)
-        if t in ("vector", "pairs") and isinstance(value, tuple):
-            value = [list(x) if isinstance(x, tuple) else x for x in value]
+        if t in ("vector", "pairs") and not isinstance(value, (list, str, bytes, dict)):
+            try:  # an API caller's tuple, array or any iterable: its entries as a list
+                value = list(value.tolist() if isinstance(value, np.ndarray) else value)
+            except TypeError:
+                pass  # not iterable: refused below, by name
+        if t == "pairs" and isinstance(value, list):
+            value = [list(x.tolist() if isinstance(x, np.ndarray) else x)
+                     if isinstance(x, (tuple, np.ndarray)) else x for x in value]
+        if t == "boolean" and isinstance(value, np.bool_):
+            value = bool(value)
         if t == "angle" and self.low is not None and self.high is not None \
                 and not self.low_open:  # with the hint for degrees given as radians
             return v.angle(path, value, low=self.low, high=self.high,
@@ -254,9 +260,13 @@ class Field:
         """Raise naming the bound ``x`` violates (``= -3.0: must be > 0 kg``)."""
         u = f" {self.unit}" if self.unit else ""
         msg = None
-        if self.low is not None and (x <= self.low if self.low_open else x < self.low):
+        below = self.low is not None and (x <= self.low if self.low_open else x < self.low)
+        above = self.high is not None and (x >= self.high if self.high_open else x > self.high)
+        if (below or above) and self.low is not None and self.high is not None:
+            msg = f"must lie {self.range_text()}"  # the whole range
+        elif below:
             msg = f"must be {'>' if self.low_open else '>='} {self.low:g}{u}"
-        elif self.high is not None and (x >= self.high if self.high_open else x > self.high):
+        elif above:
             msg = f"must be {'<' if self.high_open else '<='} {self.high:g}{u}"
         if msg:
             raise ModelError(path, f"= {x!r}: {msg}" + (f" ({self.note})" if self.note else ""))

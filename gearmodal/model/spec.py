@@ -186,7 +186,10 @@ def checked(fn):
 
     @functools.wraps(fn)
     def run(*args, **kwargs):
-        bound = sig.bind(*args, **kwargs)
+        try:
+            bound = sig.bind(*args, **kwargs)
+        except TypeError as err:  # as Python words it, with the builder's name
+            raise TypeError(f"{fn.__name__}() {err}") from None
         bound.apply_defaults()
         a = bound.arguments
         label = a.get("name", fn.__name__)
