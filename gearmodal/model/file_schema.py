@@ -1,7 +1,11 @@
 """The tables of the builder-level model files (``type = "drivetrain"``, ``"gear_pair"``...), as
 :class:`~gearmodal.model.schema.Table` s: the key checks of :mod:`gearmodal.model.toml_io` and the
-file-format reference page (``docs/file-format.md``) both come from here. The component tables
-(``type = "components"``, what :func:`gearmodal.dumps` writes) are each component's ``SCHEMA``.
+file-format reference page (``docs/file-format.md``) both come from here. A builder's own table
+is made from its signature (:mod:`gearmodal.model.spec`), its gear and body tables from the
+components' schemas; what is written here is only what no builder or component says (the
+``[model]`` table, a stage's keys in a drivetrain's ``[[stages]]``, the model types). The
+component tables (``type = "components"``, what :func:`gearmodal.dumps` writes) are each
+component's ``SCHEMA``.
 """
 
 from __future__ import annotations
