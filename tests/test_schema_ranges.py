@@ -185,3 +185,12 @@ def test_a_kind_keeps_its_stage_through_a_merge_and_a_stepper_subclass_its_class
 
     moved = Stop("s", "pinion").renamed(lambda n: f"stage1.{n}", "stage1")
     assert (moved.name, moved.a, moved.stage) == ("stage1.s", "stage1.pinion", "stage1")
+
+
+def test_help_shows_a_builders_types_without_its_file_metadata():
+    import inspect
+
+    sig = inspect.signature(gm.planetary_stage)
+    assert sig.parameters["carrier_mass"].annotation is float
+    assert sig.parameters["n_planets"].default == 3
+    assert "Annotated" not in str(sig) and "planet_angles" in str(sig)

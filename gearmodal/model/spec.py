@@ -198,4 +198,9 @@ def checked(fn):
                 a[e.param] = e.field.check(f"{label}.{e.param}", a[e.param])
         return fn(*bound.args, **bound.kwargs)
 
+    # what help() and an editor show: the types without the file metadata
+    hints = typing.get_type_hints(fn)
+    run.__signature__ = sig.replace(parameters=[
+        p.replace(annotation=hints.get(name, p.annotation))
+        for name, p in sig.parameters.items()], return_annotation=hints.get("return"))
     return run
