@@ -465,10 +465,9 @@ def _centre(name: str, centre_distance, a: Gear, b: Gear, pairs: dict) -> tuple[
     if centre_distance is None:
         return ((a.base_radius + b.base_radius) / math.cos(a.transverse_pressure_angle),
                 dict.fromkeys(pairs))
-    field = f"{name}.centre_distance"
-    centre = v.positive(field, centre_distance, "m")
-    return centre, {key: _operating_angle(field, centre, rb, label)
-                    for key, (rb, label) in pairs.items()}
+    field = f"{name}.centre_distance"  # (its range checked with the builder's arguments)
+    return centre_distance, {key: _operating_angle(field, centre_distance, rb, label)
+                             for key, (rb, label) in pairs.items()}
 
 
 def _needs_contact_ratio(field: str, spec: dict) -> None:
