@@ -202,6 +202,9 @@ class Assembly:
     body_slices: dict = field(default_factory=dict)
     springs: Contacts | None = None
     round: Contacts | None = None
+    #: the input body's rotation rate per state velocity (n,): its absolute speed is the
+    #: input speed plus ``input_speed @ v`` (None: the model names no input)
+    input_speed: np.ndarray | None = None
 
     def reduction(self) -> tuple[Assembly, np.ndarray | None]:
         """``(assembly to solve, N)``: ``(self, None)``; a coupled assembly answers its
@@ -559,7 +562,18 @@ def assemble(model, azimuth: float = 0.0) -> Assembly:
     return Assembly(dof_names=model.dof_names, load_names=load_names, M=ctx.M, C=ctx.C,
                     K=ctx.K, G=ctx.G, K_cent=ctx.K_cent, f_cent=ctx.f_cent, B=B,
                     contacts=contacts, azimuth=azimuth, body_slices=slices, springs=springs,
-                    round=round_)
+                    round=round_, input_speed=_input_speed(model, slices, n))
+
+
+def _input_speed(model, slices: dict, n: int) -> np.ndarray | None:
+    """:attr:`Assembly.input_speed`: the input body's ``theta`` (its last local coordinate;
+    ``u = rotation_scale theta`` where scaled), or None without an input or a rotation."""
+    b = model.bodies.get(model.input) if model.input is not None else None
+    if b is None or b.local_indices[-1] != 5:
+        return None
+    row = np.zeros(n)
+    row[slices[b.name].stop - 1] = 1.0 / (b.rotation_scale or 1.0)
+    return row
 
 
 def _on_pins(model, pinned: list[str], azimuth: float) -> Assembly:
@@ -629,4 +643,5 @@ def _on_pins(model, pinned: list[str], azimuth: float) -> Assembly:
                     C=proj(full.C), K=proj(full.K), G=proj(full.G), K_cent=proj(full.K_cent),
                     f_cent=proj(full.f_cent, right=False), B=proj(full.B[:, cols], right=False),
                     contacts=red(full.contacts), azimuth=azimuth,
-                    body_slices=slices, springs=red(full.springs), round=red(full.round))
+                    body_slices=slices, springs=red(full.springs), round=red(full.round),
+                    input_speed=None if full.input_speed is None else full.input_speed @ N)

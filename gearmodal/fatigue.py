@@ -38,6 +38,11 @@ from .errors import ModelError
 WOEHLER = {"tooth_root": 8.7, "tooth_flank": 13.2, "bearing": 10.0 / 3.0}
 #: default reference number of cycles of a DEL (F1)
 N_REF = 1e7
+#: the exponents of the exact load integrals ``int F^p dN`` of a planet bearing's radial force
+#: over the input's revolutions ``N`` (ISO 281: 3 for ball, 10/3 for roller bearings), kept per
+#: peak bin by the exact method, and their columns in
+#: :attr:`gearmodal.SimulationResult.peak_bins` (N^p); ``input_revolutions`` beside them
+LOAD_INTEGRALS = {3.0: "int_F3_dN", 10.0 / 3.0: "int_F10_3_dN"}
 
 
 def _series(name: str, values) -> np.ndarray:
@@ -365,6 +370,111 @@ def rating_life(load: pd.Series, speed_rpm, C: float, p: float = WOEHLER["bearin
             "l10_h": l10 * 1e6 / (60.0 * n_mean)}
 
 
+def level_spectrum(result, channels: list[str], *, t_from: float = 0.0,
+                   t_to: float | None = None) -> pd.DataFrame | None:
+    """The exact load duration and revolution distributions (LDD and LRD, F2) of the largest
+    of ``channels`` from ``t_from`` to ``t_to`` (s; the run's end by default), from the run's
+    exact level changes (:attr:`gearmodal.SimulationResult.level_changes`): between two
+    changes every channel stays in its bin, so the largest's bin is the largest of theirs, and
+    the time and the model input's revolutions in each bin are sums over exact intervals (the
+    revolutions those of the input's own speed, integrated on every piece's series); none
+    depends on the output step. The channels share their edges (mesh flanks, or planet
+    bearings' radial forces: :data:`LEVELS`). Columns ``level_low``, ``level_high``,
+    ``time_s``, ``revolutions`` (NaN for a model without an ``input``; exact where ``t_from``
+    and ``t_to`` are on the peak bins' grid or the run's end); ``None`` when the run has no
+    level changes (a method other than the exact one's Taylor propagator,
+    ``turning_points=False``)."""
+    chunks = result.level_chunks()
+    first = next(chunks, None)
+    if first is None:
+        return None
+    t1 = result.time_span()[1] if t_to is None else float(t_to)
+    if not (math.isfinite(t_from) and t_from < t1):
+        raise ModelError("t_from", f"= {t_from!r}: must be before the end, {t1!r} s")
+    want = set(channels)
+    times: dict[str, list] = {c: [] for c in channels}
+    bins: dict[str, list] = {c: [] for c in channels}
+    marks = [[np.zeros(1)], [np.zeros(1)]]  # the input's revolutions: 0 at the start
+    edges = None
+    for chunk in itertools.chain([first], chunks):
+        mine = chunk["channel"].isin(want) | (chunk["channel"] == "input")
+        chunk = chunk[mine]
+        marks[0].append(np.asarray(chunk.index, dtype=float))
+        marks[1].append(chunk["input_revolutions"].to_numpy(dtype=float))
+        chunk = chunk[(chunk["bin"] >= 0) & (chunk.index < t1)]
+        for ch, part in chunk.groupby("channel", sort=False, observed=True):
+            times[ch].append(np.asarray(part.index, dtype=float))
+            bins[ch].append(part["bin"].to_numpy(dtype=np.int64))
+            if edges is None:
+                edges = _edges_of(part)
+    missing = [c for c in channels if not times[c]]
+    if missing:
+        raise ModelError("channels", f"= {missing[0]!r}: no level changes of that channel "
+                         "(a mesh flank or a planet bearing's radial force)")
+    T = {c: np.concatenate(times[c]) for c in channels}
+    B = {c: np.concatenate(bins[c]) for c in channels}
+    # every instant a channel changes bin, inside the span
+    u = np.unique(np.concatenate([[t_from, t1], *(x[(x > t_from) & (x < t1)]
+                                                   for x in T.values())]))
+    top = np.full(len(u) - 1, -1, dtype=np.int64)
+    for c in channels:
+        k = np.searchsorted(T[c], u[:-1], side="right") - 1  # the last change at or before
+        if np.any(k < 0):
+            raise ModelError("t_from", f"= {t_from!r}: before the run's start")
+        top = np.maximum(top, B[c][k])
+    nb = len(edges) - 1
+    tm, rv = np.concatenate(marks[0]), np.concatenate(marks[1])
+    order = np.argsort(tm, kind="stable")
+    R = np.interp(u, tm[order], rv[order])  # every u is a row's time or a mark's
+    return pd.DataFrame({"level_low": edges[:-1], "level_high": edges[1:],
+                         "time_s": np.bincount(top, weights=np.diff(u), minlength=nb),
+                         "revolutions": np.bincount(top, weights=np.diff(R), minlength=nb)})
+
+
+def _edges_of(part: pd.DataFrame) -> np.ndarray:
+    """A channel's level edges, from its rows' bins and their limits (:data:`LEVELS`)."""
+    for key, edges in LEVELS.items():
+        if key != "rotor_torque_Nm" and np.array_equal(
+                edges[part["bin"].to_numpy(dtype=np.int64)], part["level_low_N"].to_numpy()):
+            return edges
+    raise ModelError("level_changes", "edges that are not a table of LEVELS")
+
+
+def equivalent_loads(result, p: float, *, t_from: float = 0.0) -> pd.DataFrame | None:
+    """The ISO 281 equivalent load (F3) of every planet bearing's radial force from the exact
+    solution, from ``t_from`` (s) to the run's end, over the revolutions of the model's input
+    (its own speed, every piece's series)::
+
+        P_eq^p = int F^p dN / int dN
+
+    each integral that of every piece's series (Gauss-Legendre to rounding), kept per peak
+    bin (:attr:`gearmodal.SimulationResult.peak_bins`: ``int_F3_dN``, ``int_F10_3_dN``,
+    ``input_revolutions``). It does not depend on the output step. Indexed by channel
+    (``<element>.radial``): ``equivalent_load_N``, ``revolutions`` (the input's); ``None``
+    where the run has no load integrals (a method other than the exact one's Taylor
+    propagator, ``turning_points=False``, a model without an ``input``), ``p`` is not one of
+    :data:`LOAD_INTEGRALS` or ``t_from`` is not on the bins' grid."""
+    col = next((c for q, c in LOAD_INTEGRALS.items() if abs(q - p) <= 1e-12 * q), None)
+    bins = result.peak_bins
+    pbin = result.settings.get("peak_bin")
+    if col is None or bins is None or col not in bins.columns or not pbin:
+        return None
+    k = t_from / pbin
+    if abs(k - round(k)) > 1e-9 * max(1.0, abs(k)):
+        return None
+    b = bins[(bins.bin_start_s >= round(k) * pbin - 1e-9 * pbin) & bins[col].notna()]
+    if b.empty:
+        return None
+    sums = b.groupby("channel", sort=False)[[col, "input_revolutions"]].sum()
+    if not (sums.input_revolutions > 0).all():
+        raise ModelError("result", "the input makes no revolution over the load history: "
+                         "no equivalent load over revolutions")
+    out = pd.DataFrame({"equivalent_load_N": (sums[col] / sums.input_revolutions)
+                        ** (1.0 / p), "revolutions": sums.input_revolutions})
+    out.index.name = "channel"
+    return out
+
+
 #: load levels of the lifetime LDD/LRD tables of :func:`drivetrain_fatigue` (N m, N, N):
 #: fixed edges, so that runs add up bin by bin
 LEVELS = {"rotor_torque_Nm": np.linspace(-2e5, 6e5, 81),
@@ -389,9 +499,12 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
       grid), False where the run has none and they count the output rows;
     - ``l10_planet_bearing_h``: the shortest ISO 281 life (F3) of a planet bearing of dynamic
       rating ``bearing_C`` (N), its revolutions those of the planet on its pin
-      (``planet_spin`` per rotor revolution: ``z_ring / z_planet`` for a carrier input);
-      ``planet_bearing_revolutions`` and ``planet_bearing_peq_N`` of that bearing (what a
-      lifetime sum needs);
+      (``planet_spin`` per rotor revolution: ``z_ring / z_planet`` for a carrier input, the
+      rotor's speed the turbine's on its step); ``planet_bearing_revolutions`` and
+      ``planet_bearing_peq_N`` of that bearing (what a lifetime sum needs);
+    - ``life_exact``: True where these come from the exact solution's load integrals
+      (:func:`equivalent_loads`: independent of the output step when ``t_skip`` is on the
+      peak bins), False where the run has none and the output rows are summed;
     - ``del_rotor_torque_Nm`` (exponent of the tooth root, the turbine's rotor torque on its
       aerodynamic step), ``mean_power_W``,
       ``max_front_force_N`` (the exact maximum of the solution,
@@ -400,8 +513,10 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
       percentiles over the output times), ``duration_s`` (the time counted).
 
     With ``tables`` the dict holds ``"tables"``: ``spectra``, the LDD (time) and LRD (rotor
-    revolutions) of the rotor torque, the largest tooth force and the largest planet-bearing
-    force at the fixed levels :data:`LEVELS`.
+    revolutions) at the fixed levels :data:`LEVELS` of the rotor torque (on the turbine's
+    step), the largest tooth force and the radial force of the planet bearing with the
+    shortest life (from the exact level changes, :func:`level_spectrum`, where the run has
+    them, else from the output rows).
     """
     ex = {**WOEHLER, **(woehler or {})}
     for key, m in ex.items():
@@ -431,7 +546,7 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
     # counted as they come (RainflowStream) where there are no turning points, the few signals
     # the rest needs kept per row
     streams = {c: RainflowStream((ex["tooth_root"], ex["tooth_flank"])) for c in flanks}
-    keep: dict[str, list] = {k: [] for k in ("t", "speed", "torque", "teeth", *bearings)}
+    keep: dict[str, list] = {k: [] for k in ("t", "speed", "teeth", *bearings)}
     for f in sim.force_chunks([*flanks, *(f"{b}.{d}" for b in bearings for d in "xy")]):
         f = f[f.index >= t_skip]
         if f.empty:
@@ -439,7 +554,6 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
         keep["t"].append(np.asarray(f.index, dtype=float))
         keep["speed"].append(tur["rotor_speed_rpm"].reindex(f.index, method="nearest")
                              .to_numpy())
-        keep["torque"].append(tur["torque_Nm"].reindex(f.index, method="nearest").to_numpy())
         keep["teeth"].append(f[flanks].max(axis=1).to_numpy())
         for b in bearings:
             keep[b].append(np.hypot(f[f"{b}.x"], f[f"{b}.y"]).to_numpy())
@@ -449,14 +563,31 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
     t = np.concatenate(keep["t"])
     index = pd.Index(t, name="time")
     speed = np.concatenate(keep["speed"])
-    torque = pd.Series(np.concatenate(keep["torque"]), index=index)
     teeth = np.concatenate(keep["teeth"])
     radial = {b: pd.Series(np.concatenate(keep[b]), index=index) for b in bearings}
-    worst = max(radial, key=lambda b: float(np.mean(radial[b] ** ex["bearing"])))
     ratio = float(planet_spin)
-    life = {b: rating_life(radial[b], ratio * speed, bearing_C, ex["bearing"]) for b in bearings}
-    short = min(life, key=lambda b: life[b]["l10_h"])
-    revs = float(np.sum(_weights(t) * ratio * np.abs(speed) / 60.0))
+    rotor_rpm = tur["rotor_speed_rpm"]  # on the turbine's (aerodynamic) step
+    # the bearings' equivalent loads and the load spectra from the exact solution where the
+    # run has them (independent of the output step), else from the rows
+    peq = equivalent_loads(sim, ex["bearing"], t_from=t_skip)
+    t_end = sim.time_span()[1]
+    if peq is not None:
+        peq = peq.rename(index=lambda c: c[:-len(".radial")])
+        short = worst = str(peq["equivalent_load_N"].idxmax())
+        revs = ratio * float(peq.loc[short, "revolutions"])
+        p_eq = float(peq.loc[short, "equivalent_load_N"])
+        l10 = (bearing_C / p_eq) ** ex["bearing"] if p_eq > 0 else math.inf
+        life = {"equivalent_load_N": p_eq,
+                "l10_h": l10 * 1e6 / (60.0 * revs * 60.0 / (t_end - t_skip))}
+        duration = t_end - t_skip
+    else:
+        worst = max(radial, key=lambda b: float(np.mean(radial[b] ** ex["bearing"])))
+        lives = {b: rating_life(radial[b], ratio * speed, bearing_C, ex["bearing"])
+                 for b in bearings}
+        short = min(lives, key=lambda b: lives[b]["l10_h"])
+        life = lives[short]
+        revs = float(np.sum(_weights(t) * ratio * np.abs(speed) / 60.0))
+        duration = float(t[-1] - t[0])
     if exact is not None:
         dels = {"del_tooth_N": float(exact.iloc[:, 0][flanks].max()),
                 "del_tooth_flank_N": float(exact.iloc[:, 1][flanks].max()),
@@ -470,27 +601,51 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
                                             for r in radial.values())}
     # the rotor torque on the turbine's own (aerodynamic) step, not the gearbox's rows
     rotor = tur["torque_Nm"][tur.index >= t_skip - 1e-9]
-    row = {"duration_s": float(t[-1] - t[0]),
+    row = {"duration_s": duration,
            **dels,
            "dels_exact": exact is not None,
-           "l10_planet_bearing_h": life[short]["l10_h"],
-           "planet_bearing_peq_N": life[short]["equivalent_load_N"],
+           "l10_planet_bearing_h": life["l10_h"],
+           "planet_bearing_peq_N": life["equivalent_load_N"],
            "planet_bearing_revolutions": revs,
+           "life_exact": peq is not None,
            "del_rotor_torque_Nm": damage_equivalent_load(rotor, ex["tooth_root"], n_ref),
            "max_front_force_N": float(sim.peaks(t_skip)["peak_force_N"][flanks].max()),
            "p99_tooth_force_N": float(np.percentile(teeth, 99.0)),
            "p99_planet_bearing_force_N": float(np.percentile(radial[worst], 99.0)),
            "mean_power_W": float(tur["power_W"][tur.index >= t_skip].mean())}
     if tables:
-        rotor_rpm = pd.Series(speed, index=index)
-        parts = []
-        for name, series in (("rotor_torque_Nm", torque), ("tooth_force_N", teeth),
-                             ("planet_bearing_force_N", radial[worst])):
-            edges = LEVELS[name]
-            x = pd.Series(np.clip(np.asarray(series), edges[0], edges[-1]), index=index)
-            ldd = load_duration(x, edges)
-            lrd = load_revolutions(x, rotor_rpm, edges)
-            parts.append(ldd.assign(quantity=name, revolutions=lrd["revolutions"]))
-        row["tables"] = {"spectra": pd.concat(parts, ignore_index=True)}
+        row["tables"] = {"spectra": _spectra(sim, flanks, worst, teeth, radial[worst],
+                                             rotor, rotor_rpm, index, speed, t_skip)}
     return row
+
+
+def _spectra(sim, flanks, worst, teeth, radial, rotor, rotor_rpm, index, speed, t_skip):
+    """:func:`drivetrain_fatigue`'s LDD and LRD tables at :data:`LEVELS`: the rotor torque on
+    the turbine's step; the largest flank force and the ``worst`` planet bearing's radial
+    force from the run's exact level changes (:func:`level_spectrum`) where it has them, else
+    from the output rows (``teeth``, ``radial`` on ``index`` with the rotor ``speed``)."""
+    # the rotor torque: each aerodynamic step's value held over its step (the last to the
+    # run's end), its revolutions at the step's rotor speed
+    edges = LEVELS["rotor_torque_Nm"]
+    t = np.asarray(rotor.index, dtype=float)
+    held = np.diff(np.append(t, sim.time_span()[1]))
+    spin = np.abs(rotor_rpm.reindex(rotor.index).to_numpy()) / 60.0
+    k = np.clip(np.searchsorted(edges, rotor.to_numpy(), side="right") - 1, 0, len(edges) - 2)
+    parts = [pd.DataFrame({"level_low": edges[:-1], "level_high": edges[1:],
+                           "time_s": np.bincount(k, held, minlength=len(edges) - 1),
+                           "quantity": "rotor_torque_Nm",
+                           "revolutions": np.bincount(k, held * spin,
+                                                      minlength=len(edges) - 1)})]
+    for name, channels, rows in (("tooth_force_N", flanks, teeth),
+                                 ("planet_bearing_force_N", [f"{worst}.radial"], radial)):
+        edges = LEVELS[name]
+        exact = level_spectrum(sim, channels, t_from=t_skip)
+        if exact is None:
+            x = pd.Series(np.clip(np.asarray(rows), edges[0], edges[-1]), index=index)
+            exact = load_duration(x, edges).assign(
+                revolutions=load_revolutions(x, pd.Series(speed, index=index), edges)
+                ["revolutions"])
+        parts.append(exact.assign(quantity=name)[["level_low", "level_high", "time_s",
+                                                  "quantity", "revolutions"]])
+    return pd.concat(parts, ignore_index=True)
 

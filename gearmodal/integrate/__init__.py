@@ -32,7 +32,7 @@ from .peaks import PEAK_BIN, peak_table
 from .record import ForceMap, Recorder, event_table
 from .result import ELEMENT_COLUMNS, SimulationResult, StoredTables
 from .system import PiecewiseLinearSystem
-from .turns import turn_table
+from .turns import level_table, turn_table
 
 #: most output steps of a run (each a row of the result's tables)
 MAX_STEPS = 5e7
@@ -361,15 +361,18 @@ def build_result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings,
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
     tables = _Tables(seg_systems, t, X, S, event_array([events]), mesh_k, displacements,
                      velocities)
-    bins = turning = None
+    bins = turning = levels = None
     if peaks is not None:
         bins = peak_table(peaks, system.asm.contacts.columns, float(t[-1]))
         settings = {**settings, "peak_bin": peaks.bin}
         if bins is not None and peaks.turns.enabled:  # the exact kernel throughout
-            peaks.turns.finish()
-            turning = turn_table(peaks.turns.channels, peaks.turns.rows())
+            tp = peaks.turns
+            tp.finish()
+            turning = turn_table(tp.channels, tp.rows())
+            levels = level_table(tp.channels, tp.levels, tp.level_rows())
     return SimulationResult(t=t, settings=settings, initial_state=init, stats=stats,
                             tables=tables, peak_bins=bins, turning_points=turning,
+                            level_changes=levels,
                             elements=functools.partial(elements_table, system.asm))
 
 

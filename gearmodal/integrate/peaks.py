@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ModelError
+from ..fatigue import LOAD_INTEGRALS
 from .turns import TurnPoints
 
 __all__ = ["PEAK_BIN", "PeakTracker", "peak_table"]
@@ -87,6 +88,17 @@ class PeakTracker:
         self.sval = np.ascontiguousarray(W[r_, c_], dtype=float)
         self.sk = np.array([sp.stiffness[r] for r in rows], dtype=float)
         self.sc = np.array([sp.damping[r] for r in rows], dtype=float)
+        # the input speed's row after the springs' (the load integrals' revolutions)
+        speed = system.asm.input_speed
+        self.speed_row = -1
+        if speed is not None and np.any(speed):
+            j = np.flatnonzero(speed)
+            self.speed_row = len(rows)
+            self.sptr = np.append(self.sptr, self.sptr[-1] + len(j))
+            self.sidx = np.append(self.sidx, j).astype(np.int64)
+            self.sval = np.append(self.sval, speed[j])
+            self.sk = np.append(self.sk, 0.0)
+            self.sc = np.append(self.sc, 1.0)
         # the planet bearings' radial forces (the other springs' peaks are sampled)
         chans, labels = [], []
         local = {(sp.element[r], sp.contact[r]): i for i, r in enumerate(rows)}
@@ -100,7 +112,8 @@ class PeakTracker:
 
         self.EP = np.empty((nc, 2))
         self.EP[:, 0], self.EP[:, 1] = -np.inf, np.nan
-        self.PB = np.empty((0, nc + len(labels), 2))
+        # per bin and channel: peak, its time, a radial channel's load integrals
+        self.PB = np.empty((0, nc + len(labels), 5))
         # each channel's pending piece (taylor._offer): its terms (a radial channel's square
         # has up to twice the series' terms), (bound, start, length, end, bin), count
         width = 2 * MAX_TERMS
@@ -110,14 +123,14 @@ class PeakTracker:
         #: every piece so far went through the exact kernel (else the peaks are sampled)
         self.exact = True
         #: the exact turning points of the same channels (:mod:`.turns`)
-        self.turns = TurnPoints(system, labels, enabled=turns)
+        self.turns = TurnPoints(system, labels, enabled=turns, speed_row=self.speed_row)
 
     def ensure(self, t_end: float) -> None:
         """Bins up to absolute time ``t_end`` (s)."""
         nb = int(t_end // self.bin) + 1
         if nb > len(self.PB):
-            grown = np.empty((nb, self.PB.shape[1], 2))
-            grown[:, :, 0], grown[:, :, 1] = -np.inf, np.nan
+            grown = np.empty((nb, self.PB.shape[1], 5))
+            grown[:, :, 0], grown[:, :, 1], grown[:, :, 2:] = -np.inf, np.nan, 0.0
             grown[:len(self.PB)] = self.PB
             self.PB = grown
 
@@ -156,11 +169,14 @@ class PeakTracker:
 
 def peak_table(tracker: PeakTracker, columns: list, t_end: float) -> pd.DataFrame | None:
     """The exact peaks of ``tracker`` by force-table column and bin (long format: columns
-    ``bin_start_s``, ``channel``, ``peak_force_N``, ``time_s``); ``columns`` are the contacts'
-    force columns (``Contacts.columns``: ``((column, weight), ...)`` per contact). A column is
-    exact when it is one contact (weight 1) or a dead band's two sides (+1 and -1, never
-    closed together; its peak the larger side's); springs as the tracker's channels. ``None``
-    when the run did not go through the exact kernel throughout."""
+    ``bin_start_s``, ``channel``, ``peak_force_N``, ``time_s``, and a radial channel's load
+    integrals over the bin ``int_F3_dN``, ``int_F10_3_dN`` (``int F^p dN``, N^p, ``N`` the
+    model input's revolutions) and ``input_revolutions``, with the turning points and an
+    input; NaN for the others); ``columns`` are the contacts' force columns
+    (``Contacts.columns``: ``((column, weight), ...)`` per contact). A column is exact when
+    it is one contact (weight 1) or a dead band's two sides (+1 and -1, never closed
+    together; its peak the larger side's); springs as the tracker's channels. ``None`` when
+    the run did not go through the exact kernel throughout."""
     if not tracker.exact or not len(tracker.PB):
         return None
     tracker.flush()
@@ -183,22 +199,32 @@ def peak_table(tracker: PeakTracker, columns: list, t_end: float) -> pd.DataFram
         cols.append(key)
         vals.append(v[np.arange(nb), j])
         times.append(PB[np.arange(nb), np.array(es)[j], 1])
+    n_contact_cols = len(cols)
     for i, key in enumerate(tracker.channels):
         cols.append(key)
         vals.append(PB[:, nc + i, 0])
         times.append(PB[:, nc + i, 1])
+    names = [*LOAD_INTEGRALS.values(), "input_revolutions"]
     if not cols:
-        return pd.DataFrame(columns=["bin_start_s", "channel", "peak_force_N", "time_s"])
+        return pd.DataFrame(columns=["bin_start_s", "channel", "peak_force_N", "time_s",
+                                     *names])
     V, T = np.array(vals).T, np.array(times).T  # (bins, channels)
     # a bin no piece reached (an open contact throughout): no force, at the bin's start; a
     # contact whose largest k p + c p' in a bin is negative (damping just before it opens) was
     # open in that bin too, where its force is 0 (the force column's value)
     starts = np.arange(nb) * tracker.bin
-    n_contact_cols = len(cols) - len(tracker.channels)
     empty = ~np.isfinite(V)
     empty[:, :n_contact_cols] |= V[:, :n_contact_cols] < 0.0
     V = np.where(empty, 0.0, V)
     T = np.where(empty, starts[:, None], T)
-    return pd.DataFrame({"bin_start_s": np.repeat(starts, len(cols)),
-                         "channel": np.tile(np.array(cols, dtype=object), nb),
-                         "peak_force_N": V.ravel(), "time_s": T.ravel()})
+    out = {"bin_start_s": np.repeat(starts, len(cols)),
+           "channel": np.tile(np.array(cols, dtype=object), nb),
+           "peak_force_N": V.ravel(), "time_s": T.ravel()}
+    # the radial channels' load integrals over the input's revolutions (with the turning
+    # points and an input; NaN elsewhere): rad to revolutions
+    for k, name in enumerate(names):
+        I = np.full((nb, len(cols)), np.nan)
+        if tracker.turns.enabled and tracker.speed_row >= 0:
+            I[:, n_contact_cols:] = PB[:, nc:nc + len(tracker.channels), 2 + k] / (2 * np.pi)
+        out[name] = I.ravel()
+    return pd.DataFrame(out)

@@ -16,7 +16,7 @@ import pandas as pd
 
 from ..result_io import TableWriter
 from .result import EVENT_COLUMNS
-from .turns import TURN_COLUMNS, turn_table
+from .turns import LEVEL_COLUMNS, TURN_COLUMNS, level_table, turn_table
 
 #: rows of one stretch the recorder gathers before forming their forces (1 000 x 70 states:
 #: 0.6 MB)
@@ -138,10 +138,8 @@ class Recorder:
         self._n_pending = 0
         self._events: list = []  # event rows not yet made a table
         self._n_events_pending = 0
-        self._turns: TableWriter | None = None  # made with the first turning points
-        self._turn_rows: list = []  # turning points not yet made a table
-        self._n_turns_pending = 0
-        self._channels: list[str] = []
+        # the exact turning points and level changes, each table made with its first rows
+        self._exact: dict[str, _Batched] = {}
 
     def rows(self, k0: int, X: np.ndarray, S: np.ndarray, system, seg_k0: int,
              azimuths: np.ndarray | None) -> None:
@@ -194,23 +192,25 @@ class Recorder:
                 self._flush_events()
 
     def turns(self, rows: np.ndarray, channels: list[str]) -> None:
-        """Exact turning points ((n, 3): time, channel index, value;
+        """Exact turning points ((n, 4): time, channel index, value, -;
         :class:`~.turns.TurnPoints`) to the table ``turning_points``, made a table a batch
         at a time (as the events)."""
-        if self._turns is None:
-            self._turns = TableWriter(self.directory, "turning_points", list(TURN_COLUMNS),
-                                      dtype=None)
-        self._channels = channels
-        self._turn_rows.append(np.array(rows, dtype=float))
-        self._n_turns_pending += len(rows)
-        if self._n_turns_pending >= BATCH:
-            self._flush_turns()
+        self._batched("turning_points", TURN_COLUMNS,
+                      lambda r: turn_table(channels, r)).add(rows)
 
-    def _flush_turns(self) -> None:
-        if self._turn_rows:
-            rows = np.concatenate(self._turn_rows)
-            self._turn_rows, self._n_turns_pending = [], 0
-            self._turns.append_frame(turn_table(self._channels, rows))
+    def levels(self, rows: np.ndarray, channels: list[str], levels: dict) -> None:
+        """Exact level changes ((n, 4): time, channel index, bin, revolutions;
+        :class:`~.turns.TurnPoints`) to the table ``level_changes``, a batch at a time."""
+        self._batched("level_changes", LEVEL_COLUMNS,
+                      lambda r: level_table(channels, levels, r)).add(rows)
+
+    def _batched(self, name: str, columns, frame) -> _Batched:
+        if name not in self._exact:
+            self._exact[name] = _Batched(TableWriter(self.directory, name, list(columns),
+                                                     dtype=None))
+        out = self._exact[name]
+        out.frame = frame
+        return out
 
     def _flush_events(self) -> None:
         if self._events:
@@ -224,7 +224,33 @@ class Recorder:
         self._flush_events()
         for w in self.writers.values():
             w.close()
-        if self._turns is not None:
-            self._flush_turns()
-            self._turns.close()
+        for b in self._exact.values():
+            b.close()
         return self.directory
+
+
+class _Batched:
+    """Rows of one exact table (turning points, level changes) made a frame (``frame``) and
+    written a batch of :data:`BATCH` rows at a time."""
+
+    def __init__(self, writer: TableWriter):
+        self.writer = writer
+        self.frame = None
+        self.rows: list = []
+        self.n = 0
+
+    def add(self, rows: np.ndarray) -> None:
+        self.rows.append(np.array(rows, dtype=float))
+        self.n += len(rows)
+        if self.n >= BATCH:
+            self.flush()
+
+    def flush(self) -> None:
+        if self.rows:
+            rows = np.concatenate(self.rows)
+            self.rows, self.n = [], 0
+            self.writer.append_frame(self.frame(rows))
+
+    def close(self) -> None:
+        self.flush()
+        self.writer.close()

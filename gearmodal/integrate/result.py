@@ -43,6 +43,8 @@ ELEMENT_COLUMNS = ["kind", "stage", "role", "planet"]
 SAVE_VERSION = 2
 #: the tables indexed by time that a stored result reads from its directory
 STORED_TABLES = ("q", "v", "forces", "contact_state")
+#: the exact method's streamed statistics tables (read when first asked for)
+EXACT_TABLES = ("turning_points", "level_changes")
 
 
 class StoredTables:
@@ -137,6 +139,15 @@ class SimulationResult:
         What a rainflow count reads (:func:`gearmodal.fatigue.turning_cycles`): it does not
         depend on the output step. ``None`` for other methods. A stored run reads it when
         first asked for; :meth:`turning_chunks` goes through it a row group at a time.
+    level_changes : the exact level changes (exact method, Taylor propagator) of the mesh
+        flanks' and the planet bearings' radial forces (:mod:`gearmodal.integrate.turns`):
+        when each one's force enters another level bin (the edges of
+        :data:`gearmodal.fatigue.LEVELS`), located on the pieces' series as crossings are;
+        index ``time`` (s), columns ``channel``, ``bin`` (the bin from that time on),
+        ``level_low_N``, ``level_high_N``, each channel's first row the run's start. What the
+        exact load duration and revolution distributions read
+        (:func:`gearmodal.fatigue.level_spectrum`): they do not depend on the output step.
+        ``None`` for other methods.
     constraint_residual : coupled systems only: the exact residual ``g`` of every constraint
         row along the trajectory (m or rad; rounding for linear constraints, second order for
         linearised joints).
@@ -168,6 +179,7 @@ class SimulationResult:
     elements: pd.DataFrame | None = None
     peak_bins: pd.DataFrame | None = None
     turning_points: pd.DataFrame | None = None
+    level_changes: pd.DataFrame | None = None
     #: ``tables(name) -> DataFrame`` builds the tables not given (see the class docstring)
     tables: object = field(default=None, repr=False, compare=False)
     #: the directory a streamed or loaded run's tables are read from (None: in memory)
@@ -298,14 +310,22 @@ class SimulationResult:
     def turning_chunks(self):
         """The turning points (:attr:`turning_points`) in chunks of rows: a stored run's row
         groups (constant memory), else the whole table; nothing without them."""
-        if self.stored is not None and self.__dict__.get("_turning_points") is None:
+        yield from self._exact_chunks("turning_points")
+
+    def level_chunks(self):
+        """The level changes (:attr:`level_changes`) in chunks of rows, as
+        :meth:`turning_chunks`."""
+        yield from self._exact_chunks("level_changes")
+
+    def _exact_chunks(self, name: str):
+        if self.stored is not None and self.__dict__.get("_" + name) is None:
             try:
-                table_path(self.stored, "turning_points")
+                table_path(self.stored, name)
             except ModelError:
                 return
-            yield from table_chunks(self.stored, "turning_points")
-        elif self.turning_points is not None:
-            yield self.turning_points
+            yield from table_chunks(self.stored, name)
+        elif getattr(self, name) is not None:
+            yield getattr(self, name)
 
     # -- structure -----------------------------------------------------------------------
     def meshes(self, role: str | None = None) -> list[str]:
@@ -678,18 +698,19 @@ class SimulationResult:
             remove_table(d / f"{name}.{'csv' if format == 'parquet' else 'parquet'}")
         if self.peak_bins is not None:
             write_table(self.peak_bins, d, "peak_bins", format, index_label=None)
-        src = None
-        if self.stored is not None and self.__dict__.get("_turning_points") is None:
-            try:
-                src = table_path(self.stored, "turning_points")
-            except ModelError:
-                src = None
-        if src is not None and src.suffix == f".{format}":
-            if not same:
-                copy_table(src, d)
-        elif self.turning_points is not None:
-            write_table(self.turning_points, d, "turning_points", format)
-        remove_table(d / f"turning_points.{'csv' if format == 'parquet' else 'parquet'}")
+        for name in EXACT_TABLES:
+            src = None
+            if self.stored is not None and self.__dict__.get("_" + name) is None:
+                try:
+                    src = table_path(self.stored, name)
+                except ModelError:
+                    src = None
+            if src is not None and src.suffix == f".{format}":
+                if not same:
+                    copy_table(src, d)
+            elif getattr(self, name) is not None:
+                write_table(getattr(self, name), d, name, format)
+            remove_table(d / f"{name}.{'csv' if format == 'parquet' else 'parquet'}")
         if self.elements is not None:
             write_table(self.elements, d, "elements", format, index_label="element")
         if self.constraint_forces is not None:
@@ -702,7 +723,7 @@ class SimulationResult:
         # not its footer or a folder's list of parts): a damaged or edited file is named when
         # the result is loaded
         names = [f"{n}.{format}" for n in (*STORED_TABLES, "events", "peak_bins",
-                                           "turning_points", "elements",
+                                           *EXACT_TABLES, "elements",
                                            "constraint_forces", "constraint_residual")]
         write_header(d, "SimulationResult", SAVE_VERSION, initial_state=self.initial_state,
                      constraints=self.constraint_forces is not None, tables=format,
@@ -798,26 +819,31 @@ def _elements_property() -> property:
 SimulationResult.elements = _elements_property()
 
 
-def _turning_property() -> property:
-    """:attr:`SimulationResult.turning_points`: a stored run's table is read when first asked
-    for (a long run's points need not be held by a pass that streams them)."""
+def _exact_property(name: str, doc: str) -> property:
+    """:attr:`SimulationResult.turning_points`, :attr:`SimulationResult.level_changes`: a
+    stored run's table is read when first asked for (a long run's rows need not be held by a
+    pass that streams them)."""
 
     def get(self):
-        val = self.__dict__.get("_turning_points")
+        val = self.__dict__.get("_" + name)
         if val is None and self.__dict__.get("stored") is not None \
-                and not self.__dict__.get("_turning_read"):
-            self.__dict__["_turning_read"] = True
-            if any((Path(self.stored) / f"turning_points.{ext}").exists()
+                and not self.__dict__.get(f"_{name}_read"):
+            self.__dict__[f"_{name}_read"] = True
+            if any((Path(self.stored) / f"{name}.{ext}").exists()
                    for ext in ("parquet", "csv")):
-                val = read_table(self.stored, "turning_points", dtype={"channel": str})
-                self.__dict__["_turning_points"] = val
+                val = read_table(self.stored, name, dtype={"channel": str})
+                self.__dict__["_" + name] = val
         return val
 
     def set_(self, val):
-        self.__dict__["_turning_points"] = val
+        self.__dict__["_" + name] = val
 
-    return property(get, set_, doc="The exact turning points of the force channels (time, "
-                    "channel, force_N), or None (see the class docstring).")
+    return property(get, set_, doc=doc)
 
 
-SimulationResult.turning_points = _turning_property()
+SimulationResult.turning_points = _exact_property(
+    "turning_points", "The exact turning points of the force channels (time, channel, "
+    "force_N), or None (see the class docstring).")
+SimulationResult.level_changes = _exact_property(
+    "level_changes", "The exact level changes of the flank and radial bearing forces (time, "
+    "channel, bin, level_low_N, level_high_N), or None (see the class docstring).")

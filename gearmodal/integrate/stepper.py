@@ -819,6 +819,9 @@ class _Discard:
     def turns(self, rows, channels) -> None:
         pass
 
+    def levels(self, rows, channels, levels) -> None:
+        pass
+
 
 class _Reference:
     """The reference input azimuth ``psi(t) = psi_f + om_f (t - t_f)`` (rad), re-based

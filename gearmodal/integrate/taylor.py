@@ -1088,14 +1088,106 @@ def _feed(ch, t, v, TS, TP, ntp):
     return ntp
 
 
+@numba.njit(cache=True, inline="always")
+def _level_bin(TS, ch, v):
+    """The level bin of channel ``ch`` at value ``v`` (:mod:`.turns`: its ``ne`` edges
+    ``TS[ch, LEVEL0:LEVEL0 + ne]``): bin ``j`` holds ``[e_j, e_(j+1))``, values below the
+    first edge are in bin 0 and from the last edge on in bin ``ne - 2`` (as
+    :func:`gearmodal.fatigue.load_duration` clips them)."""
+    ne = int(TS[ch, 6])
+    lo = 0
+    hi = ne
+    while lo < hi:  # the edges <= v
+        mid = (lo + hi) // 2
+        if TS[ch, LEVEL0 + mid] <= v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return float(min(max(lo - 1, 0), ne - 2))
+
+
 @numba.njit(cache=True)
-def _piece_turns(ch, P, m, t_abs, h, te, jump, root, TS, TP, ntp, taus, d, e, wflat, stk):
+def _level_row(TP, ntp, t, ch, b, reserve, rev, tau):
+    """A level change of channel ``ch`` (in bin ``b`` from time ``t`` on, ``tau`` into the
+    piece) appended to ``TP`` as ``(t, -(ch + 1), b, R)``, ``R`` the input's revolutions from
+    the run's start (rad; ``rev``: :func:`_track_turns`'s, NaN without an input); ``TP``
+    grown first where fewer than ``reserve`` rows (the turning points the piece may still
+    add) would be left."""
+    if ntp + 1 + reserve > TP.shape[0]:
+        grown = np.empty((2 * TP.shape[0] + reserve + 1, TP.shape[1]))
+        grown[:ntp] = TP[:ntp]
+        TP = grown
+    TP[ntp, 0] = t
+    TP[ntp, 1] = -(ch + 1.0)
+    TP[ntp, 2] = b
+    TP[ntp, 3] = _revolutions(rev, tau) if rev[1] > 0.0 else np.nan
+    return TP, ntp + 1
+
+
+@numba.njit(cache=True)
+def _level_jump(ch, t, v, TS, TP, ntp, reserve, rev):
+    """Channel ``ch`` has value ``v`` at time ``t`` after a jump (its first point, a contact
+    switching, a stiffness changing): its level bin set there (a row where it changes)."""
+    if TS[ch, 6] < 2.0:
+        return TP, ntp
+    b = _level_bin(TS, ch, v)
+    if b != TS[ch, 5]:
+        TS[ch, 5] = b
+        TP, ntp = _level_row(TP, ntp, t, ch, b, reserve, rev, 0.0)
+    return TP, ntp
+
+
+@numba.njit(cache=True)
+def _level_segment(ch, P, m, root, t_abs, h, ta, tb, vb, TS, TP, ntp, g, reserve, rev):
+    """Channel ``ch`` over ``[ta, tb]`` of a piece (``P``: its series of ``m`` terms, monotone
+    there; a radial channel's square with ``root``), ending at value ``vb``: every edge it
+    passes, located on the series (Newton and bisection, :func:`_refine`, to adjacent floats)
+    and written as a level change (:func:`_level_row`). ``g``: scratch of ``m``."""
+    if TS[ch, 6] < 2.0:
+        return TP, ntp
+    b_new = _level_bin(TS, ch, vb)
+    b = TS[ch, 5]
+    if b_new == b:
+        return TP, ntp
+    up = b_new > b
+    j = int(b) + 1 if up else int(b)
+    while (up and j <= b_new) or (not up and j > b_new):
+        edge = TS[ch, LEVEL0 + j]
+        target = edge * abs(edge) if root else edge
+        sign = 1.0 if up else -1.0  # g = sign (P - target) rises through 0 at the edge
+        for k in range(m):
+            g[k] = sign * P[k]
+        g[0] -= sign * target
+        glo = _hpoly(g[:m], ta)
+        ghi = _hpoly(g[:m], tb)
+        if glo > 0.0:
+            tau = ta  # passed at the segment's start (rounding of the last piece's end)
+        elif ghi <= 0.0:
+            tau = tb
+        else:
+            tau = _refine(g[:m], ta, tb, glo, ghi)
+        nb = float(j) if up else float(j - 1)
+        TS[ch, 5] = nb
+        TP, ntp = _level_row(TP, ntp, t_abs + tau * h, ch, nb, reserve, rev, tau)
+        j = j + 1 if up else j - 1
+    return TP, ntp
+
+
+@numba.njit(cache=True)
+def _piece_turns(ch, P, m, t_abs, h, te, jump, root, TS, TP, ntp, taus, d, e, wflat, stk,
+                 rev):
     """Channel ``ch`` over one piece (``P``: its series of ``m`` terms, a radial channel's
     square with ``root``): its start value where the channel jumped there, its interior
-    extrema (:func:`poly_turns`) and its end value, through :func:`_feed`."""
+    extrema (:func:`poly_turns`) and its end value, through :func:`_feed`; with level edges
+    (``TS[ch, 6]``), every change of its level bin (:func:`_level_jump`,
+    :func:`_level_segment`: the piece is monotone between its extrema). Returns ``TP`` (grown
+    where the level changes needed it) and its rows used."""
+    reserve = TS.shape[0] * (taus.shape[0] + 2)
     if jump:
         v = P[0]
-        ntp = _feed(ch, t_abs, math.sqrt(max(v, 0.0)) if root else v, TS, TP, ntp)
+        v = math.sqrt(max(v, 0.0)) if root else v
+        TP, ntp = _level_jump(ch, t_abs, v, TS, TP, ntp, reserve, rev)
+        ntp = _feed(ch, t_abs, v, TS, TP, ntp)
     # the last terms, together below rounding of the piece's size, left out of the search
     size = 0.0
     sc = 1.0
@@ -1110,27 +1202,147 @@ def _piece_turns(ch, P, m, t_abs, h, te, jump, root, TS, TP, ntp, taus, d, e, wf
         ms -= 1
         sc = sc / te if te > 0.0 else 0.0
     cnt = poly_turns(P, ms, te, taus, d, e, wflat, stk)
-    for i in range(cnt):
-        v = _hpoly(P[:m], taus[i])
-        ntp = _feed(ch, t_abs + taus[i] * h, math.sqrt(max(v, 0.0)) if root else v, TS, TP,
-                    ntp)
-    v = _hpoly(P[:m], te)
-    return _feed(ch, t_abs + te * h, math.sqrt(max(v, 0.0)) if root else v, TS, TP, ntp)
+    ta = 0.0
+    for i in range(cnt + 1):
+        tb = taus[i] if i < cnt else te
+        v = _hpoly(P[:m], tb)
+        v = math.sqrt(max(v, 0.0)) if root else v
+        TP, ntp = _level_segment(ch, P, m, root, t_abs, h, ta, tb, v, TS, TP, ntp, d,
+                                 reserve, rev)
+        ntp = _feed(ch, t_abs + tb * h, v, TS, TP, ntp)
+        ta = tb
+    return TP, ntp
+
+
+#: the columns of a turning channel's state ``TS`` (:class:`~.turns.TurnPoints`): its last
+#: point's time and value, direction, has one, jump flag; level bin (-1: none yet), number of
+#: level edges; the input speed's sparse row (-1: none), the reference speed (rad/s) it is
+#: added to and the input's revolutions from the run's start (rad); the level edges from
+#: ``LEVEL0`` on
+LEVEL0 = 10
+#: Gauss-Legendre nodes and weights on [-1, 1] of the load integrals (:func:`_load_integrals`):
+#: exact for polynomials of degree 31; a piece's series decays as ``REACH^k / k!`` (the
+#: step's choice), so its powers are integrated to rounding (tests/test_turning.py holds it
+#: against a dense reference)
+GAUSS_X, GAUSS_W = np.polynomial.legendre.leggauss(16)
+
+
+@numba.njit(cache=True)
+def _revolutions(rev, tau):
+    """The input's revolutions (rad) from the run's start to ``tau`` into the piece: ``rev``
+    holds those at the piece's start, the antiderivative ``A`` of its speed over the piece
+    (``int Omega dt`` from the start) and the zeros of the speed inside it
+    (:func:`_track_turns`), so ``R = R0 + sum |A(z_(i+1)) - A(z_i)|`` over the stretches
+    between them, each of one sign."""
+    na = int(rev[1])
+    c = rev[2:2 + na]
+    nz = int(rev[2 + na])
+    R = rev[0]
+    a = 0.0
+    Aa = 0.0
+    for i in range(nz + 1):
+        b = rev[3 + na + i] if i < nz else tau
+        if b > tau:
+            b = tau
+        Ab = _hpoly(c, b)
+        R += abs(Ab - Aa)
+        a = b
+        Aa = Ab
+        if a >= tau:
+            break
+    return R
+
+
+@numba.njit(cache=True)
+def _load_integrals(P, m, sp, ns, rev, t_abs, h, te, pbin, PB, col):
+    """``int F^3 dN`` and ``int F^(10/3) dN`` (:data:`gearmodal.fatigue.LOAD_INTEGRALS`: a
+    ball and a roller bearing's exponents; ``dN = |Omega| dt``, ``Omega`` the input's speed)
+    and ``int dN`` over ``[0, te]`` of a piece (``P``: the series of a radial channel's square
+    ``F^2``, ``m`` terms; ``sp``: the input speed's, ``ns`` terms, rad/s, ``rev`` its zeros
+    in the piece, :func:`_revolutions`; from absolute time ``t_abs``, length ``h``), added to
+    ``PB[b, col, 2:5]`` of each peak bin ``b`` it touches: Gauss-Legendre
+    (:data:`GAUSS_X`) between the bins' edges and the speed's zeros (a smooth integrand on
+    each part)."""
+    nb = PB.shape[0]
+    b0 = min(int(t_abs // pbin), nb - 1)
+    na = int(rev[1])
+    nz = int(rev[2 + na])
+    iz = 0
+    a = 0.0
+    b = b0
+    while a < te:
+        edge = te if b >= nb - 1 else min(max(((b + 1) * pbin - t_abs) / h, a), te)
+        tb = edge
+        if iz < nz and rev[3 + na + iz] < tb:
+            tb = rev[3 + na + iz]
+            iz += 1
+        if tb > a:
+            half = 0.5 * (tb - a)
+            mid = 0.5 * (tb + a)
+            s3 = 0.0
+            s10 = 0.0
+            sn = 0.0
+            for i in range(GAUSS_X.shape[0]):
+                x = mid + half * GAUSS_X[i]
+                v = max(_hpoly(P[:m], x), 0.0)
+                w = GAUSS_W[i] * abs(_hpoly(sp[:ns], x))
+                f3 = v * math.sqrt(v)
+                s3 += w * f3
+                s10 += w * f3 * v ** (1.0 / 6.0)
+                sn += w
+            PB[b, col, 2] += s3 * half * h
+            PB[b, col, 3] += s10 * half * h
+            PB[b, col, 4] += sn * half * h
+        if tb >= edge:
+            b += 1
+        a = tb
 
 
 @numba.njit(cache=True)
 def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx, FT, sptr,
                  sidx, sval, sk, sc, chp, TCH, TCW, TS, jumped, TP, ntp, fx, fy, P, tmp, taus,
-                 d, ee, wflat, stk):
+                 d, ee, wflat, stk, PB, pbin, spd, rev):
     """The turning points over the piece ``Bv`` (from absolute time ``t_abs``, length ``h``, up
     to ``te`` of it) of every turning channel: the contact channels ``TCH`` (up to two
     contacts each, weights ``TCW``: a force column of one contact or a dead band's two sides;
     0 while open; a contact ``jumped`` at the piece's start: switched or its stiffness
     changed) and then the spring channels ``chp`` (a bearing's radial force, as
-    :func:`_track_peaks`). Returns the rows of ``TP`` used (room for every point of the piece
-    is the caller's)."""
+    :func:`_track_peaks`), and their level changes (:func:`_piece_turns`); a spring channel's
+    load integrals into the peak bins ``PB`` (:func:`_load_integrals`, over the input speed's
+    series, formed into ``spd``, where ``TS`` names its row; ``rev``: the input's revolutions
+    from the run's start, rad, at the piece's start, its antiderivative's number of terms and
+    terms, the number of the speed's zeros in the piece and the zeros: :func:`_revolutions`,
+    what the level changes carry). Returns ``TP``
+    (grown where level changes needed it) and its rows used (room for every turning point of
+    the piece is the caller's)."""
     nct = TCH.shape[0]
     t1 = t_abs + te * h
+    # the input's speed (rad/s) and revolutions over the piece
+    rev[1] = 0.0
+    ns = 0
+    if TS.shape[0] > 0 and TS[0, 7] >= 0.0:
+        _row_series(Bv, nt, h, sptr, sidx, sval, int(TS[0, 7]), 0.0, 1.0, 0.0, spd, tmp)
+        spd[0] += TS[0, 8]
+        ns = nt - 1
+        rev[0] = TS[0, 9]
+        rev[1] = ns + 1.0
+        rev[2] = 0.0
+        for k in range(ns):
+            rev[3 + k] = spd[k] * h / (k + 1.0)
+        # the speed's zeros in the piece: the extrema of its antiderivative (poly_turns)
+        na = ns + 1
+        nz = poly_turns(rev[2:2 + na], na, te, taus, d, ee, wflat, stk)
+        rev[2 + na] = nz
+        for i in range(nz):
+            rev[3 + na + i] = taus[i]
+        # a mark of the input's revolutions at each peak bin's start inside the piece: a
+        # level row of channel -1 (the rows' end)
+        kb = int(t_abs // pbin) + 1
+        while kb * pbin <= t1:
+            TP, ntp = _level_row(TP, ntp, kb * pbin, TS.shape[0], -1.0,
+                                 TS.shape[0] * (taus.shape[0] + 2), rev,
+                                 (kb * pbin - t_abs) / h)
+            kb += 1
     for ch in range(nct):
         closed = False
         jump = TS[ch, 4] != 0.0 or TS[ch, 3] == 0.0
@@ -1144,6 +1356,8 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
         TS[ch, 4] = 0.0
         if not closed:
             if jump:
+                TP, ntp = _level_jump(ch, t_abs, 0.0, TS, TP, ntp,
+                                      TS.shape[0] * (taus.shape[0] + 2), rev)
                 ntp = _feed(ch, t_abs, 0.0, TS, TP, ntp)
             ntp = _feed(ch, t1, 0.0, TS, TP, ntp)
             continue
@@ -1164,17 +1378,23 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
                     fx[k] = FT[et, k]
             for k in range(nt):
                 P[k] += TCW[ch, j] * fx[k]
-        ntp = _piece_turns(ch, P, nt, t_abs, h, te, jump, False, TS, TP, ntp, taus, d, ee,
-                           wflat, stk)
+        TP, ntp = _piece_turns(ch, P, nt, t_abs, h, te, jump, False, TS, TP, ntp, taus, d,
+                               ee, wflat, stk, rev)
     for r in range(TS.shape[0] - nct):  # (none when the turning points are off)
         ch = nct + r
         jump = TS[ch, 4] != 0.0 or TS[ch, 3] == 0.0
         TS[ch, 4] = 0.0
         m2 = _radial_square(Bv, nt, h, sptr, sidx, sval, sk, sc, chp[r, 0], chp[r, 1], fx, fy,
                             P, tmp)
-        ntp = _piece_turns(ch, P, m2, t_abs, h, te, jump, True, TS, TP, ntp, taus, d, ee,
-                           wflat, stk)
-    return ntp
+        if ns:
+            _load_integrals(P, m2, spd, ns, rev, t_abs, h, te, pbin, PB, off.shape[0] + r)
+        TP, ntp = _piece_turns(ch, P, m2, t_abs, h, te, jump, True, TS, TP, ntp, taus, d,
+                               ee, wflat, stk, rev)
+    if rev[1] > 0.0:  # the revolutions at the next piece's start
+        R = _revolutions(rev, te)
+        for ch in range(TS.shape[0]):
+            TS[ch, 9] = R
+    return TP, ntp
 
 
 #: force samples within this fraction of their size from the line through a stretch's first
@@ -1280,7 +1500,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     Exact peaks (``track``; :class:`~gearmodal.integrate.peaks.PeakTracker`): every piece's
     contact forces and spring channels (sparse rows ``sptr``, ``sidx``, ``sval`` with
     stiffness ``sk`` and damping ``sc``, channels ``chp``) are searched for their maxima
-    (:func:`_track_peaks`) into the bins ``PB`` (n_bins, contacts + channels, 2: value, time)
+    (:func:`_track_peaks`) into the bins ``PB`` (n_bins, contacts + channels, 5: value, time,
+    and with the turning points a spring channel's load integrals, :func:`_load_integrals`)
     of ``pbin`` s and each contact's open episode ``EP`` (contacts, 2); times are absolute
     (``t_call``: this call's start). ``EV`` rows have 8 columns: the six above, then on a row
     that opens a contact the peak force of the episode it ends and its time (else NaN).
@@ -1288,8 +1509,9 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     Exact turning points (with ``track``; :class:`~gearmodal.integrate.turns.TurnPoints`): of
     the contact channels ``TCH``/``TCW`` and the spring channels ``chp``
     (:func:`_track_turns`), each channel's state in ``TS``, appended to ``TP`` (time, channel,
-    value) from row ``ntp``; the call returns ``(status, k, n_ev, contact, EV, TP, ntp)``
-    (``TP`` a larger array than the one passed if it ran full).
+    value) from row ``ntp``, and the changes of their level bins (channels with edges in
+    ``TS``) as rows ``(time, -(channel + 1), bin)``; the call returns ``(status, k, n_ev,
+    contact, EV, TP, ntp)`` (``TP`` a larger array than the one passed if it ran full).
 
     A run advanced over several calls (:class:`~gearmodal.integrate.stepper.Stepper`): row
     ``j`` of ``F``, ``X``, ``S`` is at time ``(j + k_org) dt`` and every time (``TL``,
@@ -1428,6 +1650,8 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     # exact turning points: the contacts that jumped at the current piece's start, scratch
     jumped = np.zeros(nc, dtype=np.bool_)
     taus = np.empty(2 * n_terms)
+    pspd = np.zeros(2 * n_terms)  # the input speed's series (load integrals)
+    prev = np.zeros(6 * n_terms + 4)  # its revolutions (level changes)
     n_turn = TS.shape[0]  # channels: the contact channels, then the spring channels
     turn_room = n_turn * (2 * n_terms + 2)  # the most points one piece can add
     toggled = 0
@@ -1722,13 +1946,13 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                                  counts)
                 if track and n_turn:
                     if ntp + turn_room > TP.shape[0]:
-                        grownT = np.empty((2 * TP.shape[0] + turn_room, 3))
+                        grownT = np.empty((2 * TP.shape[0] + turn_room, TP.shape[1]))
                         grownT[:ntp] = TP[:ntp]
                         TP = grownT
-                    ntp = _track_turns(Bv, nt, h, t_call + t, 1.0, s, kc, cc, off, wptr, widx,
+                    TP, ntp = _track_turns(Bv, nt, h, t_call + t, 1.0, s, kc, cc, off, wptr, widx,
                                        wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH,
                                        TCW, TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_,
-                                       pe_, pwork, stk)
+                                       pe_, pwork, stk, PB, pbin, pspd, prev)
                     jumped[:] = False
                 t_old = t
                 t = t_end if h == remaining else t + h
@@ -1768,13 +1992,13 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                              PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk, counts)
             if track and n_turn:
                 if ntp + turn_room > TP.shape[0]:
-                    grownT = np.empty((2 * TP.shape[0] + turn_room, 3))
+                    grownT = np.empty((2 * TP.shape[0] + turn_room, TP.shape[1]))
                     grownT[:ntp] = TP[:ntp]
                     TP = grownT
-                ntp = _track_turns(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx,
+                TP, ntp = _track_turns(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx,
                                    wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH, TCW,
                                    TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_, pe_,
-                                   pwork, stk)
+                                   pwork, stk, PB, pbin, pspd, prev)
                 jumped[:] = False
             while jn <= k2 and jn <= j_in and (jn + k_org) * dt < t_ev - 1e-13 * dt:
                 _evaluate(Bv, ((jn + k_org) * dt - t) / h, h, qo, vo)
@@ -2195,7 +2419,7 @@ class TaylorIntegrator:
         EV = np.empty((max(64, 4 * (self.max_events + sysm.n_contacts + 1)), 8))  # grows
         if peaks is None:
             nc = sysm.n_contacts
-            track = (False, np.zeros((nc, 2)), np.zeros((1, nc, 2)), 1.0,
+            track = (False, np.zeros((nc, 2)), np.zeros((1, nc, 5)), 1.0,
                      np.zeros((nc, 1)), np.full((nc, 5), -np.inf), np.zeros(nc, dtype=np.int64))
             rows = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0),
                     np.zeros(0), np.zeros(0), np.zeros((0, 2), dtype=np.int64))
@@ -2206,7 +2430,7 @@ class TaylorIntegrator:
                 raise ValueError(f"{self.n_terms} terms: the peak tracker holds pieces of at "
                                  f"most {(peaks.PC.shape[1] + 1) // 2}")
             peaks.ensure(t0 + n_steps * self.dt)
-            track, rows, turns = peaks.args(), peaks.rows(), peaks.turns.args()
+            track, rows, turns = peaks.args(), peaks.rows(), peaks.turns.args(sysm.omega)
         k, n_ev = 0, 0
         counts = np.zeros(7, dtype=np.int64)
         met = int((self.state_bound.keys >= 0).sum())  # states bounded before this run

@@ -28,10 +28,17 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-__all__ = ["TurnPoints", "turn_table", "TURN_COLUMNS"]
+from ..fatigue import LEVELS
+from .taylor import LEVEL0
+
+__all__ = ["TurnPoints", "turn_table", "level_table", "TURN_COLUMNS", "LEVEL_COLUMNS"]
 
 #: the columns of the turning-point table (its index is ``time``)
 TURN_COLUMNS = ("channel", "force_N")
+#: the channel of the level-change table's marks of the input's revolutions (bin -1)
+MARK = "input"
+#: the columns of the level-change table (its index is ``time``)
+LEVEL_COLUMNS = ("channel", "bin", "level_low_N", "level_high_N", "input_revolutions")
 #: rows of the kernel's first point buffer (it grows as a run needs)
 FIRST_ROOM = 4096
 #: pandas 3 has a string dtype of its own ("str"); pandas 2 keeps labels as objects
@@ -72,22 +79,48 @@ class TurnPoints:
     enabled : False: no channel (the kernel skips the work; the run has no turning points).
     """
 
-    def __init__(self, system, radial: list[str], enabled: bool = True):
-        labels, self.TCH, self.TCW = contact_channels(system.asm.contacts.columns)
+    def __init__(self, system, radial: list[str], enabled: bool = True, speed_row: int = -1):
+        contacts = system.asm.contacts
+        labels, self.TCH, self.TCW = contact_channels(contacts.columns)
         if not enabled:
             labels, radial = [], []
             self.TCH, self.TCW = self.TCH[:0], self.TCW[:0]
         self.enabled = bool(enabled)
         self.channels = labels + list(radial)
-        # per channel: last point's time and value, direction, has one, jump flag
-        self.TS = np.zeros((len(self.channels), 5))
-        self.TP = np.empty((FIRST_ROOM, 3))
+        # the level edges of each channel (a mesh flank's the tooth force's, a radial
+        # bearing force's the planet bearing's; none for the others)
+        self.levels: dict[str, np.ndarray] = {}
+        for ch, label in enumerate(labels):
+            if contacts.kind[int(self.TCH[ch, 0])] == "mesh":
+                self.levels[label] = LEVELS["tooth_force_N"]
+        for label in radial:
+            self.levels[label] = LEVELS["planet_bearing_force_N"]
+        width = max((len(e) for e in self.levels.values()), default=0)
+        # per channel (taylor.LEVEL0): last point's time and value, direction, has one, jump
+        # flag, level bin (-1: none yet), number of level edges, the input speed's row among
+        # the spring rows (-1: none), the reference speed it adds to (set per call) and the
+        # input's revolutions so far (rad), the edges
+        self.TS = np.zeros((len(self.channels), LEVEL0 + width))
+        self.TS[:, 5] = -1.0
+        self.TS[:, 7] = speed_row
+        self.TS[:, 9] = 0.0
+        for ch, label in enumerate(self.channels):
+            edges = self.levels.get(label)
+            if edges is not None:
+                self.TS[ch, 6] = len(edges)
+                self.TS[ch, LEVEL0:LEVEL0 + len(edges)] = edges
+        # rows: a turning point (time, channel, value, -) or a level change (time,
+        # -(channel + 1), bin, the input's revolutions from the start, rad)
+        self.TP = np.empty((FIRST_ROOM, 4))
         self.n = 0
         self._kept: list[np.ndarray] = []
+        self._kept_levels: list[np.ndarray] = []
         self.finished = False
 
-    def args(self) -> tuple:
-        """The kernel's turning arguments (:func:`~.taylor.taylor_run`)."""
+    def args(self, omega: float = 0.0) -> tuple:
+        """The kernel's turning arguments (:func:`~.taylor.taylor_run`) for a call whose
+        reference input speed is ``omega`` (rad/s)."""
+        self.TS[:, 8] = omega
         return (self.TCH, self.TCW, self.TS, self.TP, self.n)
 
     def update(self, TP: np.ndarray, n: int) -> None:
@@ -101,23 +134,35 @@ class TurnPoints:
             self.TS[ch, 4] = 1.0
 
     def drain(self, sink=None) -> None:
-        """The points found so far to ``sink`` (its ``turns(rows, channels)``) or kept; the
-        buffer emptied."""
+        """The points and level changes found so far to ``sink`` (its ``turns(rows,
+        channels)`` and ``levels(rows, channels, levels)``) or kept; the buffer emptied."""
         if self.n:
-            rows = self.TP[:self.n].copy()
+            rows = self.TP[:self.n]
             self.n = 0
+            level = rows[:, 1] < 0.0
+            points = rows[~level]
+            changes = rows[level]
+            changes[:, 1] = -changes[:, 1] - 1.0  # the channel's index
             if sink is not None:
-                sink.turns(rows, self.channels)
+                if len(points):
+                    sink.turns(points, self.channels)
+                if len(changes):
+                    sink.levels(changes, self.channels, self.levels)
             else:
-                self._kept.append(rows)
+                self._kept.append(points)
+                self._kept_levels.append(changes)
 
     def finish(self, sink=None) -> None:
         """The run's end: each channel's last value (the end of its sequence) drained too."""
         if self.finished:
             return
         self.finished = True
-        last = [(self.TS[ch, 0], ch, self.TS[ch, 1]) for ch in range(len(self.channels))
-                if self.TS[ch, 3] and self.TS[ch, 2] != 0.0]
+        last = [(self.TS[ch, 0], ch, self.TS[ch, 1], np.nan)
+                for ch in range(len(self.channels)) if self.TS[ch, 3] and self.TS[ch, 2] != 0.0]
+        if len(self.channels) and self.TS[0, 7] >= 0 and self.TS[0, 3]:
+            # the input's revolutions at the run's end (a mark: level_table)
+            last.append((self.TS[:, 0].max(), -(len(self.channels) + 1.0), -1.0,
+                         self.TS[0, 9]))
         if last:
             rows = np.array(last, dtype=float)
             if self.n + len(rows) > len(self.TP):
@@ -127,12 +172,41 @@ class TurnPoints:
         self.drain(sink)
 
     def rows(self) -> np.ndarray:
-        """The points kept in memory ((n, 3): time, channel index, value), run order."""
-        return np.concatenate(self._kept) if self._kept else np.empty((0, 3))
+        """The points kept in memory ((n, 4): time, channel index, value, -), run order."""
+        return np.concatenate(self._kept) if self._kept else np.empty((0, 4))
+
+    def level_rows(self) -> np.ndarray:
+        """The level changes kept in memory ((n, 4): time, channel index, bin, the input's
+        revolutions from the start in rad), run order."""
+        return np.concatenate(self._kept_levels) if self._kept_levels else np.empty((0, 4))
+
+
+def level_table(channels: list[str], levels: dict, rows: np.ndarray) -> pd.DataFrame:
+    """The level-change table of kernel rows ``rows`` ((n, 4): time, channel index, bin, the
+    input's revolutions in rad; ``levels``: each channel's edges): index ``time`` (s), columns
+    ``channel``, ``bin`` (the level bin the channel's force is in from that time on:
+    ``level_low_N <= F < level_high_N``, the first bin also below it and the last above),
+    ``input_revolutions`` (the model input's revolutions from the run's start to that time,
+    NaN without an input), each channel's rows in time order, its first the run's start. Rows
+    of channel :data:`MARK` (bin -1) give the input's revolutions at each peak bin's start and
+    at the run's end."""
+    idx = rows[:, 1].astype(np.int64)
+    b = rows[:, 2].astype(np.int64)
+    names = np.array([*channels, MARK], dtype=object)[idx]
+    low = np.full(len(rows), np.nan)
+    high = np.full(len(rows), np.nan)
+    for ch in np.unique(idx[b >= 0]):
+        edges = levels[channels[ch]]
+        sel = idx == ch
+        low[sel], high[sel] = edges[b[sel]], edges[b[sel] + 1]
+    return pd.DataFrame({"channel": pd.array(names, dtype="str") if _PANDAS_3 else names,
+                         "bin": b, "level_low_N": low, "level_high_N": high,
+                         "input_revolutions": rows[:, 3] / (2 * np.pi)},
+                        index=pd.Index(rows[:, 0], name="time"))
 
 
 def turn_table(channels: list[str], rows: np.ndarray) -> pd.DataFrame:
-    """The turning-point table of kernel rows ``rows`` ((n, 3): time, channel index, value):
+    """The turning-point table of kernel rows ``rows`` ((n, >= 3): time, channel index, value):
     index ``time`` (s), columns ``channel`` (its label) and ``force_N``,
     in the order found (each channel's rows in time order: its sequence, what a rainflow
     count reads)."""
