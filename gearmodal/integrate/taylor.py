@@ -1107,48 +1107,43 @@ def _level_bin(TS, ch, v):
 
 
 @numba.njit(cache=True)
-def _level_row(TP, ntp, t, ch, b, reserve, rev, tau):
+def _level_row(TP, ntp, t, ch, b, rev, tau):
     """A level change of channel ``ch`` (in bin ``b`` from time ``t`` on, ``tau`` into the
     piece) appended to ``TP`` as ``(t, -(ch + 1), b, R)``, ``R`` the input's revolutions from
-    the run's start (rad; ``rev``: :func:`_track_turns`'s, NaN without an input); ``TP``
-    grown first where fewer than ``reserve`` rows (the turning points the piece may still
-    add) would be left."""
-    if ntp + 1 + reserve > TP.shape[0]:
-        grown = np.empty((2 * TP.shape[0] + reserve + 1, TP.shape[1]))
-        grown[:ntp] = TP[:ntp]
-        TP = grown
+    the run's start (rad; ``rev``: :func:`_track_turns`'s, NaN without an input); room is
+    the caller's (:func:`_track_turns`)."""
     TP[ntp, 0] = t
     TP[ntp, 1] = -(ch + 1.0)
     TP[ntp, 2] = b
     TP[ntp, 3] = _revolutions(rev, tau) if rev[1] > 0.0 else np.nan
-    return TP, ntp + 1
+    return ntp + 1
 
 
 @numba.njit(cache=True)
-def _level_jump(ch, t, v, TS, TP, ntp, reserve, rev):
+def _level_jump(ch, t, v, TS, TP, ntp, rev):
     """Channel ``ch`` has value ``v`` at time ``t`` after a jump (its first point, a contact
     switching, a stiffness changing): its level bin set there (a row where it changes)."""
     if TS[ch, 6] < 2.0:
-        return TP, ntp
+        return ntp
     b = _level_bin(TS, ch, v)
     if b != TS[ch, 5]:
         TS[ch, 5] = b
-        TP, ntp = _level_row(TP, ntp, t, ch, b, reserve, rev, 0.0)
-    return TP, ntp
+        ntp = _level_row(TP, ntp, t, ch, b, rev, 0.0)
+    return ntp
 
 
 @numba.njit(cache=True)
-def _level_segment(ch, P, m, root, t_abs, h, ta, tb, vb, TS, TP, ntp, g, reserve, rev):
+def _level_segment(ch, P, m, root, t_abs, h, ta, tb, vb, TS, TP, ntp, g, rev):
     """Channel ``ch`` over ``[ta, tb]`` of a piece (``P``: its series of ``m`` terms, monotone
     there; a radial channel's square with ``root``), ending at value ``vb``: every edge it
     passes, located on the series (Newton and bisection, :func:`_refine`, to adjacent floats)
     and written as a level change (:func:`_level_row`). ``g``: scratch of ``m``."""
     if TS[ch, 6] < 2.0:
-        return TP, ntp
+        return ntp
     b_new = _level_bin(TS, ch, vb)
     b = TS[ch, 5]
     if b_new == b:
-        return TP, ntp
+        return ntp
     up = b_new > b
     j = int(b) + 1 if up else int(b)
     while (up and j <= b_new) or (not up and j > b_new):
@@ -1168,9 +1163,9 @@ def _level_segment(ch, P, m, root, t_abs, h, ta, tb, vb, TS, TP, ntp, g, reserve
             tau = _refine(g[:m], ta, tb, glo, ghi)
         nb = float(j) if up else float(j - 1)
         TS[ch, 5] = nb
-        TP, ntp = _level_row(TP, ntp, t_abs + tau * h, ch, nb, reserve, rev, tau)
+        ntp = _level_row(TP, ntp, t_abs + tau * h, ch, nb, rev, tau)
         j = j + 1 if up else j - 1
-    return TP, ntp
+    return ntp
 
 
 @numba.njit(cache=True)
@@ -1180,13 +1175,12 @@ def _piece_turns(ch, P, m, t_abs, h, te, jump, root, TS, TP, ntp, taus, d, e, wf
     square with ``root``): its start value where the channel jumped there, its interior
     extrema (:func:`poly_turns`) and its end value, through :func:`_feed`; with level edges
     (``TS[ch, 6]``), every change of its level bin (:func:`_level_jump`,
-    :func:`_level_segment`: the piece is monotone between its extrema). Returns ``TP`` (grown
-    where the level changes needed it) and its rows used."""
-    reserve = TS.shape[0] * (taus.shape[0] + 2)
+    :func:`_level_segment`: the piece is monotone between its extrema). Returns the rows of
+    ``TP`` used."""
     if jump:
         v = P[0]
         v = math.sqrt(max(v, 0.0)) if root else v
-        TP, ntp = _level_jump(ch, t_abs, v, TS, TP, ntp, reserve, rev)
+        ntp = _level_jump(ch, t_abs, v, TS, TP, ntp, rev)
         ntp = _feed(ch, t_abs, v, TS, TP, ntp)
     # the last terms, together below rounding of the piece's size, left out of the search
     size = 0.0
@@ -1202,16 +1196,17 @@ def _piece_turns(ch, P, m, t_abs, h, te, jump, root, TS, TP, ntp, taus, d, e, wf
         ms -= 1
         sc = sc / te if te > 0.0 else 0.0
     cnt = poly_turns(P, ms, te, taus, d, e, wflat, stk)
+    levels = TS[ch, 6] >= 2.0
     ta = 0.0
     for i in range(cnt + 1):
         tb = taus[i] if i < cnt else te
         v = _hpoly(P[:m], tb)
         v = math.sqrt(max(v, 0.0)) if root else v
-        TP, ntp = _level_segment(ch, P, m, root, t_abs, h, ta, tb, v, TS, TP, ntp, d,
-                                 reserve, rev)
+        if levels and _level_bin(TS, ch, v) != TS[ch, 5]:
+            ntp = _level_segment(ch, P, m, root, t_abs, h, ta, tb, v, TS, TP, ntp, d, rev)
         ntp = _feed(ch, t_abs + tb * h, v, TS, TP, ntp)
         ta = tb
-    return TP, ntp
+    return ntp
 
 
 #: the columns of a turning channel's state ``TS`` (:class:`~.turns.TurnPoints`): its last
@@ -1254,54 +1249,62 @@ def _revolutions(rev, tau):
 
 
 @numba.njit(cache=True)
-def _load_integrals(P, m, sp, ns, rev, t_abs, h, te, pbin, PB, col):
-    """``int F^3 dN`` and ``int F^(10/3) dN`` (:data:`gearmodal.fatigue.LOAD_INTEGRALS`: a
-    ball and a roller bearing's exponents; ``dN = |Omega| dt``, ``Omega`` the input's speed)
-    and ``int dN`` over ``[0, te]`` of a piece (``P``: the series of a radial channel's square
-    ``F^2``, ``m`` terms; ``sp``: the input speed's, ``ns`` terms, rad/s, ``rev`` its zeros
-    in the piece, :func:`_revolutions`; from absolute time ``t_abs``, length ``h``), added to
-    ``PB[b, col, 2:5]`` of each peak bin ``b`` it touches: Gauss-Legendre
-    (:data:`GAUSS_X`) between the bins' edges and the speed's zeros (a smooth integrand on
-    each part)."""
-    nb = PB.shape[0]
-    b0 = min(int(t_abs // pbin), nb - 1)
+def _load_nodes(sp, ns, rev, t_abs, h, te, pbin, nb, XN, WN, BN):
+    """The quadrature of the load integrals (:func:`_load_integrals`) over ``[0, te]`` of a
+    piece: 16-point Gauss-Legendre (:data:`GAUSS_X`) on each part between the peak bins'
+    edges and the input speed's zeros (``rev``, :func:`_revolutions`; a smooth integrand on
+    each part), into ``XN`` (the nodes, in the piece's ``tau``), ``WN`` (their weights times
+    ``|Omega| h``, ``Omega`` the input's speed: its series ``sp`` of ``ns`` terms, rad/s) and
+    ``BN`` (their peak bins; absolute time ``t_abs + tau h``); returns the number of nodes."""
+    ng = GAUSS_X.shape[0]
+    b = min(int(t_abs // pbin), nb - 1)
     na = int(rev[1])
     nz = int(rev[2 + na])
     iz = 0
     a = 0.0
-    b = b0
+    cnt = 0
     while a < te:
         edge = te if b >= nb - 1 else min(max(((b + 1) * pbin - t_abs) / h, a), te)
         tb = edge
         if iz < nz and rev[3 + na + iz] < tb:
             tb = rev[3 + na + iz]
             iz += 1
-        if tb > a:
+        if tb > a and cnt + ng <= XN.shape[0]:
             half = 0.5 * (tb - a)
             mid = 0.5 * (tb + a)
-            s3 = 0.0
-            s10 = 0.0
-            sn = 0.0
-            for i in range(GAUSS_X.shape[0]):
+            for i in range(ng):
                 x = mid + half * GAUSS_X[i]
-                v = max(_hpoly(P[:m], x), 0.0)
-                w = GAUSS_W[i] * abs(_hpoly(sp[:ns], x))
-                f3 = v * math.sqrt(v)
-                s3 += w * f3
-                s10 += w * f3 * v ** (1.0 / 6.0)
-                sn += w
-            PB[b, col, 2] += s3 * half * h
-            PB[b, col, 3] += s10 * half * h
-            PB[b, col, 4] += sn * half * h
+                XN[cnt] = x
+                WN[cnt] = GAUSS_W[i] * half * h * abs(_hpoly(sp[:ns], x))
+                BN[cnt] = b
+                cnt += 1
         if tb >= edge:
             b += 1
         a = tb
+    return cnt
+
+
+@numba.njit(cache=True)
+def _load_integrals(P, m, XN, WN, BN, cnt, PB, col):
+    """``int F^3 dN``, ``int F^(10/3) dN`` (:data:`gearmodal.fatigue.LOAD_INTEGRALS`: a ball
+    and a roller bearing's exponents; ``dN = |Omega| dt``) and ``int dN`` over a piece, added
+    to ``PB[b, col, 2:5]`` of each peak bin ``b`` it touches: ``P`` the series of a radial
+    channel's square ``F^2`` (``m`` terms) at the ``cnt`` nodes ``XN`` of
+    :func:`_load_nodes` (weights ``WN``, bins ``BN``)."""
+    for i in range(cnt):
+        f = math.sqrt(max(_hpoly(P[:m], XN[i]), 0.0))
+        w = WN[i]
+        f3 = w * f * f * f
+        b = BN[i]
+        PB[b, col, 2] += f3
+        PB[b, col, 3] += f3 * np.cbrt(f)
+        PB[b, col, 4] += w
 
 
 @numba.njit(cache=True)
 def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx, FT, sptr,
                  sidx, sval, sk, sc, chp, TCH, TCW, TS, jumped, TP, ntp, fx, fy, P, tmp, taus,
-                 d, ee, wflat, stk, PB, pbin, spd, rev):
+                 d, ee, wflat, stk, PB, pbin, spd, rev, XN, WN, BN):
     """The turning points over the piece ``Bv`` (from absolute time ``t_abs``, length ``h``, up
     to ``te`` of it) of every turning channel: the contact channels ``TCH`` (up to two
     contacts each, weights ``TCW``: a force column of one contact or a dead band's two sides;
@@ -1309,14 +1312,23 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
     changed) and then the spring channels ``chp`` (a bearing's radial force, as
     :func:`_track_peaks`), and their level changes (:func:`_piece_turns`); a spring channel's
     load integrals into the peak bins ``PB`` (:func:`_load_integrals`, over the input speed's
-    series, formed into ``spd``, where ``TS`` names its row; ``rev``: the input's revolutions
+    series, formed into ``spd``, where ``TS`` names its row, on the nodes ``XN``, ``WN``,
+    ``BN`` of :func:`_load_nodes`; ``rev``: the input's revolutions
     from the run's start, rad, at the piece's start, its antiderivative's number of terms and
     terms, the number of the speed's zeros in the piece and the zeros: :func:`_revolutions`,
-    what the level changes carry). Returns ``TP``
-    (grown where level changes needed it) and its rows used (room for every turning point of
-    the piece is the caller's)."""
+    what the level changes carry). Returns ``TP`` (grown first to hold every row the piece
+    may add) and its rows used."""
     nct = TCH.shape[0]
     t1 = t_abs + te * h
+    # room for every row the piece may add: each channel's turning points and, with level
+    # edges, a level change per edge on each of its monotone stretches; the marks
+    room = ntp + int(te * h / pbin) + 2
+    for ch in range(TS.shape[0]):
+        room += (taus.shape[0] + 2) * (1 + int(TS[ch, 6]))
+    if room > TP.shape[0]:
+        grown = np.empty((2 * TP.shape[0] + room, TP.shape[1]))
+        grown[:ntp] = TP[:ntp]
+        TP = grown
     # the input's speed (rad/s) and revolutions over the piece
     rev[1] = 0.0
     ns = 0
@@ -1339,9 +1351,8 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
         # level row of channel -1 (the rows' end)
         kb = int(t_abs // pbin) + 1
         while kb * pbin <= t1:
-            TP, ntp = _level_row(TP, ntp, kb * pbin, TS.shape[0], -1.0,
-                                 TS.shape[0] * (taus.shape[0] + 2), rev,
-                                 (kb * pbin - t_abs) / h)
+            ntp = _level_row(TP, ntp, kb * pbin, TS.shape[0], -1.0, rev,
+                             (kb * pbin - t_abs) / h)
             kb += 1
     for ch in range(nct):
         closed = False
@@ -1356,8 +1367,7 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
         TS[ch, 4] = 0.0
         if not closed:
             if jump:
-                TP, ntp = _level_jump(ch, t_abs, 0.0, TS, TP, ntp,
-                                      TS.shape[0] * (taus.shape[0] + 2), rev)
+                ntp = _level_jump(ch, t_abs, 0.0, TS, TP, ntp, rev)
                 ntp = _feed(ch, t_abs, 0.0, TS, TP, ntp)
             ntp = _feed(ch, t1, 0.0, TS, TP, ntp)
             continue
@@ -1378,18 +1388,26 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
                     fx[k] = FT[et, k]
             for k in range(nt):
                 P[k] += TCW[ch, j] * fx[k]
-        TP, ntp = _piece_turns(ch, P, nt, t_abs, h, te, jump, False, TS, TP, ntp, taus, d,
-                               ee, wflat, stk, rev)
+        ntp = _piece_turns(ch, P, nt, t_abs, h, te, jump, False, TS, TP, ntp, taus, d, ee,
+                           wflat, stk, rev)
+    nq = 0
+    if ns and TS.shape[0] > nct:  # the load integrals' nodes (the same for every channel)
+        need = GAUSS_X.shape[0] * (int(rev[2 + ns + 1]) + int(te * h / pbin) + 2)
+        if need > XN.shape[0]:  # (a piece over many peak bins: scratch of its own)
+            XN = np.empty(need)
+            WN = np.empty(need)
+            BN = np.empty(need, dtype=np.int64)
+        nq = _load_nodes(spd, ns, rev, t_abs, h, te, pbin, PB.shape[0], XN, WN, BN)
     for r in range(TS.shape[0] - nct):  # (none when the turning points are off)
         ch = nct + r
         jump = TS[ch, 4] != 0.0 or TS[ch, 3] == 0.0
         TS[ch, 4] = 0.0
         m2 = _radial_square(Bv, nt, h, sptr, sidx, sval, sk, sc, chp[r, 0], chp[r, 1], fx, fy,
                             P, tmp)
-        if ns:
-            _load_integrals(P, m2, spd, ns, rev, t_abs, h, te, pbin, PB, off.shape[0] + r)
-        TP, ntp = _piece_turns(ch, P, m2, t_abs, h, te, jump, True, TS, TP, ntp, taus, d,
-                               ee, wflat, stk, rev)
+        if nq:
+            _load_integrals(P, m2, XN, WN, BN, nq, PB, off.shape[0] + r)
+        ntp = _piece_turns(ch, P, m2, t_abs, h, te, jump, True, TS, TP, ntp, taus, d, ee,
+                           wflat, stk, rev)
     if rev[1] > 0.0:  # the revolutions at the next piece's start
         R = _revolutions(rev, te)
         for ch in range(TS.shape[0]):
@@ -1652,6 +1670,9 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     taus = np.empty(2 * n_terms)
     pspd = np.zeros(2 * n_terms)  # the input speed's series (load integrals)
     prev = np.zeros(6 * n_terms + 4)  # its revolutions (level changes)
+    pxn = np.empty(16 * (2 * n_terms + 8))  # the load integrals' nodes, weights, bins
+    pwn = np.empty(16 * (2 * n_terms + 8))
+    pbn = np.empty(16 * (2 * n_terms + 8), dtype=np.int64)
     n_turn = TS.shape[0]  # channels: the contact channels, then the spring channels
     turn_room = n_turn * (2 * n_terms + 2)  # the most points one piece can add
     toggled = 0
@@ -1952,7 +1973,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     TP, ntp = _track_turns(Bv, nt, h, t_call + t, 1.0, s, kc, cc, off, wptr, widx,
                                        wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH,
                                        TCW, TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_,
-                                       pe_, pwork, stk, PB, pbin, pspd, prev)
+                                       pe_, pwork, stk, PB, pbin, pspd, prev, pxn, pwn, pbn)
                     jumped[:] = False
                 t_old = t
                 t = t_end if h == remaining else t + h
@@ -1998,7 +2019,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 TP, ntp = _track_turns(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx,
                                    wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH, TCW,
                                    TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_, pe_,
-                                   pwork, stk, PB, pbin, pspd, prev)
+                                   pwork, stk, PB, pbin, pspd, prev, pxn, pwn, pbn)
                 jumped[:] = False
             while jn <= k2 and jn <= j_in and (jn + k_org) * dt < t_ev - 1e-13 * dt:
                 _evaluate(Bv, ((jn + k_org) * dt - t) / h, h, qo, vo)
