@@ -24,6 +24,7 @@ from .newmark import run_newmark
 from .peaks import PEAK_BIN, PeakTracker
 from .scipy_ref import run_scipy
 from .system import PiecewiseLinearSystem
+from .turns import DRAIN_ROWS
 
 
 class Method:
@@ -252,7 +253,7 @@ class Driver:
             ev[:, 0] += self.k * self.dt
         self._event(ev)
         if self.peaks is not None:
-            self.peaks.turns.drain(self.sink)
+            self.peaks.turns.drain(self.sink, DRAIN_ROWS)
         new = not self.segments or self.segments[-1][2] is not system
         if self.sink is not None:
             a = 0 if self.k == 0 else 1  # the first call writes the initial row too

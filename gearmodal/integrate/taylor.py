@@ -1249,13 +1249,14 @@ def _revolutions(rev, tau):
 
 
 @numba.njit(cache=True)
-def _load_nodes(sp, ns, rev, t_abs, h, te, pbin, nb, XN, WN, BN):
+def _load_nodes(sp, ns, rev, t_abs, h, te, pbin, nb, XN, WN, BN, AQ):
     """The quadrature of the load integrals (:func:`_load_integrals`) over ``[0, te]`` of a
     piece: 16-point Gauss-Legendre (:data:`GAUSS_X`) on each part between the peak bins'
     edges and the input speed's zeros (``rev``, :func:`_revolutions`; a smooth integrand on
     each part), into ``XN`` (the nodes, in the piece's ``tau``), ``WN`` (their weights times
     ``|Omega| h``, ``Omega`` the input's speed: its series ``sp`` of ``ns`` terms, rad/s) and
-    ``BN`` (their peak bins; absolute time ``t_abs + tau h``); returns the number of nodes."""
+    ``BN`` (their peak bins; absolute time ``t_abs + tau h``); ``AQ``: scratch. Returns the
+    number of nodes."""
     ng = GAUSS_X.shape[0]
     b = min(int(t_abs // pbin), nb - 1)
     na = int(rev[1])
@@ -1273,26 +1274,42 @@ def _load_nodes(sp, ns, rev, t_abs, h, te, pbin, nb, XN, WN, BN):
             half = 0.5 * (tb - a)
             mid = 0.5 * (tb + a)
             for i in range(ng):
-                x = mid + half * GAUSS_X[i]
-                XN[cnt] = x
-                WN[cnt] = GAUSS_W[i] * half * h * abs(_hpoly(sp[:ns], x))
+                XN[cnt] = mid + half * GAUSS_X[i]
+                WN[cnt] = GAUSS_W[i] * half * h
                 BN[cnt] = b
                 cnt += 1
         if tb >= edge:
             b += 1
         a = tb
+    _horner_at(sp, ns, XN, cnt, AQ)
+    for i in range(cnt):
+        WN[i] *= abs(AQ[i])
     return cnt
 
 
+@numba.njit(cache=True, inline="always")
+def _horner_at(c, m, X, cnt, out):
+    """``out[i] = sum_(k < m) c_k X_i^k`` for ``i < cnt``: Horner's rule with the nodes in the
+    inner loop (independent chains the compiler vectorises, not one dependent chain per
+    node)."""
+    for i in range(cnt):
+        out[i] = c[m - 1]
+    for k in range(m - 2, -1, -1):
+        ck = c[k]
+        for i in range(cnt):
+            out[i] = out[i] * X[i] + ck
+
+
 @numba.njit(cache=True)
-def _load_integrals(P, m, XN, WN, BN, cnt, PB, col):
+def _load_integrals(P, m, XN, WN, BN, cnt, PB, col, AQ):
     """``int F^3 dN``, ``int F^(10/3) dN`` (:data:`gearmodal.fatigue.LOAD_INTEGRALS`: a ball
     and a roller bearing's exponents; ``dN = |Omega| dt``) and ``int dN`` over a piece, added
     to ``PB[b, col, 2:5]`` of each peak bin ``b`` it touches: ``P`` the series of a radial
     channel's square ``F^2`` (``m`` terms) at the ``cnt`` nodes ``XN`` of
-    :func:`_load_nodes` (weights ``WN``, bins ``BN``)."""
+    :func:`_load_nodes` (weights ``WN``, bins ``BN``; ``AQ``: scratch)."""
+    _horner_at(P, m, XN, cnt, AQ)
     for i in range(cnt):
-        f = math.sqrt(max(_hpoly(P[:m], XN[i]), 0.0))
+        f = math.sqrt(max(AQ[i], 0.0))
         w = WN[i]
         f3 = w * f * f * f
         b = BN[i]
@@ -1304,7 +1321,7 @@ def _load_integrals(P, m, XN, WN, BN, cnt, PB, col):
 @numba.njit(cache=True)
 def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx, FT, sptr,
                  sidx, sval, sk, sc, chp, TCH, TCW, TS, jumped, TP, ntp, fx, fy, P, tmp, taus,
-                 d, ee, wflat, stk, PB, pbin, spd, rev, XN, WN, BN):
+                 d, ee, wflat, stk, PB, pbin, spd, rev, XN, WN, BN, AQ):
     """The turning points over the piece ``Bv`` (from absolute time ``t_abs``, length ``h``, up
     to ``te`` of it) of every turning channel: the contact channels ``TCH`` (up to two
     contacts each, weights ``TCW``: a force column of one contact or a dead band's two sides;
@@ -1313,7 +1330,7 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
     :func:`_track_peaks`), and their level changes (:func:`_piece_turns`); a spring channel's
     load integrals into the peak bins ``PB`` (:func:`_load_integrals`, over the input speed's
     series, formed into ``spd``, where ``TS`` names its row, on the nodes ``XN``, ``WN``,
-    ``BN`` of :func:`_load_nodes`; ``rev``: the input's revolutions
+    ``BN`` of :func:`_load_nodes`, ``AQ`` scratch; ``rev``: the input's revolutions
     from the run's start, rad, at the piece's start, its antiderivative's number of terms and
     terms, the number of the speed's zeros in the piece and the zeros: :func:`_revolutions`,
     what the level changes carry). Returns ``TP`` (grown first to hold every row the piece
@@ -1397,7 +1414,8 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
             XN = np.empty(need)
             WN = np.empty(need)
             BN = np.empty(need, dtype=np.int64)
-        nq = _load_nodes(spd, ns, rev, t_abs, h, te, pbin, PB.shape[0], XN, WN, BN)
+            AQ = np.empty(need)
+        nq = _load_nodes(spd, ns, rev, t_abs, h, te, pbin, PB.shape[0], XN, WN, BN, AQ)
     for r in range(TS.shape[0] - nct):  # (none when the turning points are off)
         ch = nct + r
         jump = TS[ch, 4] != 0.0 or TS[ch, 3] == 0.0
@@ -1405,7 +1423,7 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
         m2 = _radial_square(Bv, nt, h, sptr, sidx, sval, sk, sc, chp[r, 0], chp[r, 1], fx, fy,
                             P, tmp)
         if nq:
-            _load_integrals(P, m2, XN, WN, BN, nq, PB, off.shape[0] + r)
+            _load_integrals(P, m2, XN, WN, BN, nq, PB, off.shape[0] + r, AQ)
         ntp = _piece_turns(ch, P, m2, t_abs, h, te, jump, True, TS, TP, ntp, taus, d, ee,
                            wflat, stk, rev)
     if rev[1] > 0.0:  # the revolutions at the next piece's start
@@ -1673,6 +1691,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     pxn = np.empty(16 * (2 * n_terms + 8))  # the load integrals' nodes, weights, bins
     pwn = np.empty(16 * (2 * n_terms + 8))
     pbn = np.empty(16 * (2 * n_terms + 8), dtype=np.int64)
+    paq = np.empty(16 * (2 * n_terms + 8))
     n_turn = TS.shape[0]  # channels: the contact channels, then the spring channels
     turn_room = n_turn * (2 * n_terms + 2)  # the most points one piece can add
     toggled = 0
@@ -1973,7 +1992,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                     TP, ntp = _track_turns(Bv, nt, h, t_call + t, 1.0, s, kc, cc, off, wptr, widx,
                                        wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH,
                                        TCW, TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_,
-                                       pe_, pwork, stk, PB, pbin, pspd, prev, pxn, pwn, pbn)
+                                       pe_, pwork, stk, PB, pbin, pspd, prev, pxn, pwn, pbn, paq)
                     jumped[:] = False
                 t_old = t
                 t = t_end if h == remaining else t + h
@@ -2019,7 +2038,7 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                 TP, ntp = _track_turns(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx,
                                    wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH, TCW,
                                    TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_, pe_,
-                                   pwork, stk, PB, pbin, pspd, prev, pxn, pwn, pbn)
+                                   pwork, stk, PB, pbin, pspd, prev, pxn, pwn, pbn, paq)
                 jumped[:] = False
             while jn <= k2 and jn <= j_in and (jn + k_org) * dt < t_ev - 1e-13 * dt:
                 _evaluate(Bv, ((jn + k_org) * dt - t) / h, h, qo, vo)

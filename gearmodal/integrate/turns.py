@@ -41,6 +41,8 @@ MARK = "input"
 LEVEL_COLUMNS = ("channel", "bin", "level_low_N", "level_high_N", "input_revolutions")
 #: rows of the kernel's first point buffer (it grows as a run needs)
 FIRST_ROOM = 4096
+#: rows the buffer may hold before a driver's call hands them on (:meth:`TurnPoints.drain`)
+DRAIN_ROWS = 50_000
 #: pandas 3 has a string dtype of its own ("str"); pandas 2 keeps labels as objects
 _PANDAS_3 = int(pd.__version__.split(".")[0]) >= 3
 
@@ -133,10 +135,13 @@ class TurnPoints:
         for ch in np.flatnonzero((self.TCH == contact).any(axis=1)):
             self.TS[ch, 4] = 1.0
 
-    def drain(self, sink=None) -> None:
+    def drain(self, sink=None, above: int = 0) -> None:
         """The points and level changes found so far to ``sink`` (its ``turns(rows,
-        channels)`` and ``levels(rows, channels, levels)``) or kept; the buffer emptied."""
-        if self.n:
+        channels)`` and ``levels(rows, channels, levels)``) or kept, the buffer emptied, when
+        it holds more than ``above`` rows (a driver drains after each call above
+        :data:`DRAIN_ROWS`: a few per call of a co-simulation step would cost more to hand on
+        than to find)."""
+        if self.n > above:
             rows = self.TP[:self.n]
             self.n = 0
             level = rows[:, 1] < 0.0
