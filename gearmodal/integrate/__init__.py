@@ -119,9 +119,13 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
         ones; they cost the exact method 28-30 % more CPU on the turbine runs).
     turning_points : the exact turning points of the force channels
         (:attr:`SimulationResult.turning_points`: what exact DELs count,
-        :func:`gearmodal.fatigue.turning_dels`); exact method, with ``peak_bin``. False: none
-        (a run that needs no fatigue count saves their cost, up to about 65 % more
-        integration CPU on the clearance gearbox's turbine run).
+        :func:`gearmodal.fatigue.turning_dels`), their level changes
+        (:attr:`SimulationResult.level_changes`: exact load spectra,
+        :func:`gearmodal.fatigue.level_spectrum`) and the planet bearings' load integrals
+        (in :attr:`SimulationResult.peak_bins`: exact ISO 281 lives,
+        :func:`gearmodal.fatigue.equivalent_loads`); exact method, with ``peak_bin``. False:
+        none (a run that needs no fatigue count saves their cost, 82-90 % more integration
+        CPU on the 600 kW turbine runs).
     q0, v0 : initial displacements and velocities by DOF name (others 0). The initial contact
         state follows from ``q0`` (a contact is closed when it penetrates).
     out : a directory the result's tables are written to as Parquet while the run goes (as

@@ -309,9 +309,10 @@ def couple(turbine: Turbine, wind: Wind, gearbox, t_end: float, *, dt: float = 2
         ``benchmarks/turbine_speed.py``.
     peak_bin : width of the bins of the exact peaks, s, as :func:`gearmodal.simulate`'s;
         ``None``: no exact peaks (the sampled ones, about 22 % less integration CPU).
-    turning_points : the exact turning points of the gearbox's force channels, as
-        :func:`gearmodal.simulate`'s (what :func:`gearmodal.fatigue.drivetrain_fatigue`'s
-        exact DELs count); False: none (up to about 65 % less integration CPU).
+    turning_points : the exact turning points, level changes and load integrals of the
+        gearbox's force channels, as :func:`gearmodal.simulate`'s (what
+        :func:`gearmodal.fatigue.drivetrain_fatigue`'s exact DELs, spectra and lives come
+        from); False: none (about 45 % less integration CPU).
     out : a directory the run streams to as it goes (:meth:`DrivetrainResult.save`'s layout:
         Parquet row groups of the gearbox rows and of the turbine loads); the result reads
         its tables from there when first asked for, so the run's memory does not grow with
