@@ -388,14 +388,23 @@ def level_spectrum(result, channels: list[str], *, t_from: float = 0.0,
     first = next(chunks, None)
     if first is None:
         return None
-    t1 = result.time_span()[1] if t_to is None else float(t_to)
+    end = result.time_span()[1]
+    t1 = end if t_to is None else float(t_to)
+    if not (math.isfinite(t1) and t1 <= end + 1e-12 * max(1.0, abs(end))):
+        raise ModelError("t_to", f"= {t_to!r}: must be at most the run's end, {end!r} s")
     if not (math.isfinite(t_from) and t_from < t1):
         raise ModelError("t_from", f"= {t_from!r}: must be before the end, {t1!r} s")
+    # a flank's levels or a planet bearing's (turns.TurnPoints gives them so)
+    kinds = {"planet_bearing_force_N" if c.endswith(".radial") else "tooth_force_N"
+             for c in channels}
+    if len(kinds) != 1:
+        raise ModelError("channels", "one kind of channel: mesh flanks or planet bearings' "
+                         "radial forces (their levels differ)")
+    edges = LEVELS[kinds.pop()]
     want = set(channels)
     times: dict[str, list] = {c: [] for c in channels}
     bins: dict[str, list] = {c: [] for c in channels}
     marks = [[np.zeros(1)], [np.zeros(1)]]  # the input's revolutions: 0 at the start
-    edges = None
     for chunk in itertools.chain([first], chunks):
         mine = chunk["channel"].isin(want) | (chunk["channel"] == "input")
         chunk = chunk[mine]
@@ -403,10 +412,12 @@ def level_spectrum(result, channels: list[str], *, t_from: float = 0.0,
         marks[1].append(chunk["input_revolutions"].to_numpy(dtype=float))
         chunk = chunk[(chunk["bin"] >= 0) & (chunk.index < t1)]
         for ch, part in chunk.groupby("channel", sort=False, observed=True):
+            b = part["bin"].to_numpy(dtype=np.int64)
+            if not np.array_equal(edges[b], part["level_low_N"].to_numpy()):
+                raise ModelError("level_changes", f"{ch!r}: its levels are not those of "
+                                 "fatigue.LEVELS (a run of another gearmodal?)")
             times[ch].append(np.asarray(part.index, dtype=float))
-            bins[ch].append(part["bin"].to_numpy(dtype=np.int64))
-            if edges is None:
-                edges = _edges_of(part)
+            bins[ch].append(b)
     missing = [c for c in channels if not times[c]]
     if missing:
         raise ModelError("channels", f"= {missing[0]!r}: no level changes of that channel "
@@ -429,15 +440,6 @@ def level_spectrum(result, channels: list[str], *, t_from: float = 0.0,
     return pd.DataFrame({"level_low": edges[:-1], "level_high": edges[1:],
                          "time_s": np.bincount(top, weights=np.diff(u), minlength=nb),
                          "revolutions": np.bincount(top, weights=np.diff(R), minlength=nb)})
-
-
-def _edges_of(part: pd.DataFrame) -> np.ndarray:
-    """A channel's level edges, from its rows' bins and their limits (:data:`LEVELS`)."""
-    for key, edges in LEVELS.items():
-        if key != "rotor_torque_Nm" and np.array_equal(
-                edges[part["bin"].to_numpy(dtype=np.int64)], part["level_low_N"].to_numpy()):
-            return edges
-    raise ModelError("level_changes", "edges that are not a table of LEVELS")
 
 
 def equivalent_loads(result, p: float, *, t_from: float = 0.0) -> pd.DataFrame | None:

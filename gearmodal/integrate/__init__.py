@@ -371,9 +371,10 @@ def build_result(seg_systems, t, X, S, events, s0, stats, mesh_k, settings,
         settings = {**settings, "peak_bin": peaks.bin}
         if bins is not None and peaks.turns.enabled:  # the exact kernel throughout
             tp = peaks.turns
-            tp.finish()
+            tp.finish(t_end=float(t[-1]))
             turning = turn_table(tp.channels, tp.rows())
-            levels = level_table(tp.channels, tp.levels, tp.level_rows())
+            rows = tp.level_rows()
+            levels = level_table(tp.channels, tp.levels, rows) if len(rows) else None
     return SimulationResult(t=t, settings=settings, initial_state=init, stats=stats,
                             tables=tables, peak_bins=bins, turning_points=turning,
                             level_changes=levels,
@@ -386,7 +387,7 @@ def stored_result(recorder: Recorder, system, s0, stats, settings, span,
     here; its ``result.json`` and small tables written): its tables are read from there
     when first asked for. ``span``: the first and last output time, s."""
     if peaks is not None and peaks.exact and peaks.turns.enabled:
-        peaks.turns.finish(recorder)  # each channel's last value, to its table
+        peaks.turns.finish(recorder, float(span[1]))  # each channel's last value, to its table
     d = recorder.close()
     init = {system.names[e]: bool(s0[e]) for e in range(len(s0))}
     bins = None

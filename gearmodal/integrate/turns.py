@@ -157,17 +157,18 @@ class TurnPoints:
                 self._kept.append(points)
                 self._kept_levels.append(changes)
 
-    def finish(self, sink=None) -> None:
-        """The run's end: each channel's last value (the end of its sequence) drained too."""
+    def finish(self, sink=None, t_end: float | None = None) -> None:
+        """The run's end (``t_end``, s): each channel's last value (the end of its sequence)
+        drained too, and the input's revolutions there (a mark)."""
         if self.finished:
             return
         self.finished = True
         last = [(self.TS[ch, 0], ch, self.TS[ch, 1], np.nan)
                 for ch in range(len(self.channels)) if self.TS[ch, 3] and self.TS[ch, 2] != 0.0]
-        if len(self.channels) and self.TS[0, 7] >= 0 and self.TS[0, 3]:
-            # the input's revolutions at the run's end (a mark: level_table)
-            last.append((self.TS[:, 0].max(), -(len(self.channels) + 1.0), -1.0,
-                         self.TS[0, 9]))
+        if t_end is not None and len(self.channels) and self.TS[0, 7] >= 0 and self.TS[0, 3]:
+            # the input's revolutions at the run's end (a mark: level_table); the kernel's
+            # last piece ended there
+            last.append((float(t_end), -(len(self.channels) + 1.0), -1.0, self.TS[0, 9]))
         if last:
             rows = np.array(last, dtype=float)
             if self.n + len(rows) > len(self.TP):
