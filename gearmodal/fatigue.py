@@ -449,8 +449,9 @@ def equivalent_loads(result, p: float, *, t_from: float = 0.0) -> pd.DataFrame |
 
         P_eq^p = int F^p dN / int dN
 
-    each integral that of every piece's series (Gauss-Legendre to rounding), kept per peak
-    bin (:attr:`gearmodal.SimulationResult.peak_bins`: ``int_F3_dN``, ``int_F10_3_dN``,
+    each integral that of every piece's series (Gauss-Legendre: to rounding on the turbine
+    runs, 3e-10 on the double-contact stage's rattle), kept per peak bin
+    (:attr:`gearmodal.SimulationResult.peak_bins`: ``int_F3_dN``, ``int_F10_3_dN``,
     ``input_revolutions``). It does not depend on the output step. Indexed by channel
     (``<element>.radial``): ``equivalent_load_N``, ``revolutions`` (the input's); ``None``
     where the run has no load integrals (a method other than the exact one's Taylor
@@ -501,8 +502,9 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
       grid), False where the run has none and they count the output rows;
     - ``l10_planet_bearing_h``: the shortest ISO 281 life (F3) of a planet bearing of dynamic
       rating ``bearing_C`` (N), its revolutions those of the planet on its pin
-      (``planet_spin`` per rotor revolution: ``z_ring / z_planet`` for a carrier input, the
-      rotor's speed the turbine's on its step); ``planet_bearing_revolutions`` and
+      (``planet_spin`` per rotor revolution: ``z_ring / z_planet`` for a carrier input; the
+      rotor's revolutions at its own speed on every piece where ``life_exact``, else the
+      turbine's rotor speed at the rows); ``planet_bearing_revolutions`` and
       ``planet_bearing_peq_N`` of that bearing (what a lifetime sum needs);
     - ``life_exact``: True where these come from the exact solution's load integrals
       (:func:`equivalent_loads`: independent of the output step when ``t_skip`` is on the
