@@ -1211,9 +1211,9 @@ def _piece_turns(ch, P, m, t_abs, h, te, jump, root, TS, TP, ntp, taus, d, e, wf
 
 #: the columns of a turning channel's state ``TS`` (:class:`~.turns.TurnPoints`): its last
 #: point's time and value, direction, has one, jump flag; level bin (-1: none yet), number of
-#: level edges; the input speed's sparse row (-1: none), the reference speed (rad/s) it is
-#: added to and the input's revolutions from the run's start (rad); the level edges from
-#: ``LEVEL0`` on
+#: level edges; in the first channel's row only: the input speed's sparse row (-1: none), the
+#: reference speed (rad/s) it is added to and the input's revolutions from the run's start
+#: (rad); the level edges from ``LEVEL0`` on
 LEVEL0 = 10
 #: Gauss-Legendre nodes and weights on [-1, 1] of the load integrals (:func:`_load_integrals`):
 #: exact for polynomials of degree 31; a piece's series decays as ``REACH^k / k!`` (the
@@ -1429,9 +1429,7 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
         ntp = _piece_turns(ch, P, m2, t_abs, h, te, jump, True, TS, TP, ntp, taus, d, ee,
                            wflat, stk, rev)
     if rev[1] > 0.0:  # the revolutions at the next piece's start
-        R = _revolutions(rev, te)
-        for ch in range(TS.shape[0]):
-            TS[ch, 9] = R
+        TS[0, 9] = _revolutions(rev, te)
     return TP, ntp
 
 

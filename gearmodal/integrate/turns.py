@@ -99,13 +99,13 @@ class TurnPoints:
             self.levels[label] = LEVELS["planet_bearing_force_N"]
         width = max((len(e) for e in self.levels.values()), default=0)
         # per channel (taylor.LEVEL0): last point's time and value, direction, has one, jump
-        # flag, level bin (-1: none yet), number of level edges, the input speed's row among
-        # the spring rows (-1: none), the reference speed it adds to (set per call) and the
-        # input's revolutions so far (rad), the edges
+        # flag, level bin (-1: none yet), number of level edges; in the first row only, the
+        # input speed's row among the spring rows (-1: none), the reference speed it adds to
+        # (set per call) and the input's revolutions so far (rad); the edges
         self.TS = np.zeros((len(self.channels), LEVEL0 + width))
         self.TS[:, 5] = -1.0
-        self.TS[:, 7] = speed_row
-        self.TS[:, 9] = 0.0
+        if len(self.channels):
+            self.TS[0, 7] = speed_row
         for ch, label in enumerate(self.channels):
             edges = self.levels.get(label)
             if edges is not None:
@@ -122,7 +122,8 @@ class TurnPoints:
     def args(self, omega: float = 0.0) -> tuple:
         """The kernel's turning arguments (:func:`~.taylor.taylor_run`) for a call whose
         reference input speed is ``omega`` (rad/s)."""
-        self.TS[:, 8] = omega
+        if len(self.TS):
+            self.TS[0, 8] = omega
         return (self.TCH, self.TCW, self.TS, self.TP, self.n)
 
     def update(self, TP: np.ndarray, n: int) -> None:
