@@ -311,6 +311,12 @@ def _bins(x: np.ndarray, bins) -> np.ndarray:
     return edges
 
 
+def _level_index(edges: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The level bin of each value: ``[e_j, e_(j+1))``, below the first edge the first bin,
+    from the last on the last (the exact kernel's ``_level_bin``)."""
+    return np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
+
+
 def _weights(t: np.ndarray) -> np.ndarray:
     """The time each sample stands for: half the gaps to its neighbours (trapezoid rule)."""
     dt = np.diff(t)
@@ -328,7 +334,7 @@ def load_duration(load: pd.Series, bins=20) -> pd.DataFrame:
     x = _series("load", load)
     t = np.asarray(load.index, dtype=float)
     edges = _bins(x, bins)
-    k = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
+    k = _level_index(edges, x)
     time = np.bincount(k, weights=_weights(t), minlength=len(edges) - 1)
     return pd.DataFrame({"level_low": edges[:-1], "level_high": edges[1:], "time_s": time})
 
@@ -342,7 +348,7 @@ def load_revolutions(load: pd.Series, speed_rpm, bins=20) -> pd.DataFrame:
     if not np.all(np.isfinite(n)):
         raise ModelError("speed_rpm", "must be finite")
     edges = _bins(x, bins)
-    k = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
+    k = _level_index(edges, x)
     revs = np.bincount(k, weights=_weights(t) * np.abs(n) / 60.0, minlength=len(edges) - 1)
     return pd.DataFrame({"level_low": edges[:-1], "level_high": edges[1:],
                          "revolutions": revs})
@@ -634,7 +640,7 @@ def _spectra(sim, flanks, worst, teeth, radial, rotor, rotor_rpm, index, speed, 
     t = np.asarray(rotor.index, dtype=float)
     held = np.diff(np.append(t, sim.time_span()[1]))
     spin = np.abs(rotor_rpm.reindex(rotor.index).to_numpy()) / 60.0
-    k = np.clip(np.searchsorted(edges, rotor.to_numpy(), side="right") - 1, 0, len(edges) - 2)
+    k = _level_index(edges, rotor.to_numpy())
     parts = [pd.DataFrame({"level_low": edges[:-1], "level_high": edges[1:],
                            "time_s": np.bincount(k, held, minlength=len(edges) - 1),
                            "quantity": "rotor_torque_Nm",

@@ -44,6 +44,15 @@ def flanks(res):
     return [c for c in res.force_columns() if c.endswith((".front", ".back"))]
 
 
+def revolutions_of_rows(w, t):
+    """The trapezoid rule on ``|w|`` (rev/s at the rows ``t``) with the zeros of its linear
+    interpolant added as samples (exact for a speed linear between rows, through zero too)."""
+    k = np.flatnonzero(w[:-1] * w[1:] < 0)
+    tz = t[k] - w[k] * (t[k + 1] - t[k]) / (w[k + 1] - w[k])
+    t, w = np.insert(t, k + 1, tz), np.insert(w, k + 1, 0.0)
+    return np.trapezoid(np.abs(w), t)
+
+
 def input_speed(res):
     """The carrier's absolute speed at the rows (rad/s): its reference speed plus its
     deflection's rate."""
@@ -124,13 +133,7 @@ def test_level_revolutions_are_the_inputs(turning_runs, stage_runs):
         spec = level_spectrum(dense, [f"{b}.radial"])
         w = input_speed(dense) / (2 * np.pi)
         t = dense.forces.index.to_numpy()
-        if np.all(w > 0):
-            ref = simpson(w, x=t)
-        else:  # the zeros of the linear interpolant added as samples
-            k = np.flatnonzero(w[:-1] * w[1:] < 0)
-            tz = t[k] - w[k] * (t[k + 1] - t[k]) / (w[k + 1] - w[k])
-            t, w = np.insert(t, k + 1, tz), np.insert(w, k + 1, 0.0)
-            ref = np.trapezoid(np.abs(w), t)
+        ref = simpson(w, x=t) if np.all(w > 0) else revolutions_of_rows(w, t)
         assert spec.revolutions.sum() == pytest.approx(ref, rel=tol)
         # the mark at the run's end (the series' antiderivative between the speed's zeros)
         # against the peak bins' quadrature of the same speed (Gauss-Legendre)
@@ -231,11 +234,7 @@ def test_the_end_mark_is_at_the_run_end_when_every_force_is_flat():
     last_change = max(res.turning_points[res.turning_points.channel == c].index.max()
                       for c in fl)
     assert last_change < 0.0995 - 1e-4  # the flanks stayed flat to the end
-    w = res.v[sc.model.input + ".theta"].to_numpy() / (2 * np.pi)
-    t = res.v.index.to_numpy()
-    k = np.flatnonzero(w[:-1] * w[1:] < 0)
-    tz = t[k] - w[k] * (t[k + 1] - t[k]) / (w[k + 1] - w[k])
-    t, w = np.insert(t, k + 1, tz), np.insert(w, k + 1, 0.0)
-    ref = np.trapezoid(np.abs(w), t)
+    ref = revolutions_of_rows(res.v[sc.model.input + ".theta"].to_numpy() / (2 * np.pi),
+                              res.v.index.to_numpy())
     assert marks.input_revolutions.iloc[-1] == pytest.approx(ref, rel=2e-5)
     assert level_spectrum(res, fl).revolutions.sum() == pytest.approx(ref, rel=2e-5)
