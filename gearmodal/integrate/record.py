@@ -131,15 +131,15 @@ class Recorder:
         self.writers = {
             "q": TableWriter(d, "q", dofs), "v": TableWriter(d, "v", dofs),
             "forces": TableWriter(d, "forces", self.fmap.labels),
-            "contact_state": TableWriter(d, "contact_state", list(system.names), dtype=bool),
-            "events": TableWriter(d, "events", EVENT_COLUMNS[1:], dtype=None)}
+            "contact_state": TableWriter(d, "contact_state", list(system.names), dtype=bool)}
         self.n_events = 0
         self._pending: list = []  # rows of the current stretch not yet formed
         self._n_pending = 0
-        self._events: list = []  # event rows not yet made a table
-        self._n_events_pending = 0
-        # the exact turning points and level changes, each table made with its first rows
-        self._exact: dict[str, _Batched] = {}
+        # the event log (written even empty) and the exact turning points and level changes
+        # (each made with its first rows): rows gathered and made a frame a batch at a time
+        self._batches: dict[str, _Batched] = {"events": _Batched(
+            TableWriter(d, "events", EVENT_COLUMNS[1:], dtype=None),
+            lambda ev: event_table(system, ev).set_index("time"))}
 
     def rows(self, k0: int, X: np.ndarray, S: np.ndarray, system, seg_k0: int,
              azimuths: np.ndarray | None) -> None:
@@ -185,11 +185,8 @@ class Recorder:
         table a batch at a time (a table per aerodynamic step cost the clearance gearbox's
         turbine run 40 % of its integration)."""
         if len(ev):
-            self._events.append(np.array(ev, dtype=float))
-            self._n_events_pending += len(ev)
             self.n_events += len(ev)
-            if self._n_events_pending >= BATCH:
-                self._flush_events()
+            self._batches["events"].add(ev)
 
     def turns(self, rows: np.ndarray, channels: list[str]) -> None:
         """Exact turning points ((n, 4): time, channel index, value, -;
@@ -205,37 +202,29 @@ class Recorder:
                       lambda r: level_table(channels, levels, r)).add(rows)
 
     def _batched(self, name: str, columns, frame) -> _Batched:
-        if name not in self._exact:
-            self._exact[name] = _Batched(TableWriter(self.directory, name, list(columns),
-                                                     dtype=None))
-        out = self._exact[name]
-        out.frame = frame
-        return out
-
-    def _flush_events(self) -> None:
-        if self._events:
-            ev = np.concatenate(self._events)
-            self._events, self._n_events_pending = [], 0
-            self.writers["events"].append_frame(event_table(self.system0, ev).set_index("time"))
+        if name not in self._batches:
+            self._batches[name] = _Batched(TableWriter(self.directory, name, list(columns),
+                                                       dtype=None), frame)
+        return self._batches[name]
 
     def close(self) -> Path:
         """Close every table; returns the directory."""
         self._flush()
-        self._flush_events()
         for w in self.writers.values():
             w.close()
-        for b in self._exact.values():
+        for b in self._batches.values():
             b.close()
         return self.directory
 
 
 class _Batched:
-    """Rows of one exact table (turning points, level changes) made a frame (``frame``) and
-    written a batch of :data:`BATCH` rows at a time."""
+    """Rows of one table (events, turning points, level changes) gathered as arrays, made a
+    frame (``frame(rows)``) and written a batch of :data:`BATCH` rows at a time (a frame per
+    aerodynamic step cost the clearance gearbox's turbine run 40 % of its integration)."""
 
-    def __init__(self, writer: TableWriter):
+    def __init__(self, writer: TableWriter, frame):
         self.writer = writer
-        self.frame = None
+        self.frame = frame
         self.rows: list = []
         self.n = 0
 
