@@ -59,7 +59,7 @@ import pandas as pd
 import gearmodal as gm
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from double_contact import BEARING_C, CLEARANCE, SCENE, planet_spin  # noqa: E402
+from double_contact import BEARING_C, CLEARANCE, ROWS_DT, SCENE, planet_spin  # noqa: E402
 
 from gearmodal.fatigue import WOEHLER, drivetrain_fatigue  # noqa: E402
 from gearmodal.massscale import STUDY_TOP_FREQUENCY_HZ, study_rung  # noqa: E402
@@ -117,7 +117,7 @@ def cases(speeds, seeds: list[int], duration: float, top_frequency_hz: float | N
                 row = {"variant": name, "scene.t_end": duration, "wind.mean_speed": float(v),
                        "wind.turbulence_intensity": turbulence_intensity(v, category),
                        "wind.seed": int(sd), "turbine.connected": True,
-                       "turbine.rotor_speed0_rpm": SPEED0_RPM, **over}
+                       "turbine.rotor_speed0_rpm": SPEED0_RPM, "scene.dt": ROWS_DT, **over}
                 if top_frequency_hz is not None:
                     row["turbine.top_frequency_hz"] = float(top_frequency_hz)
                 rows.append(row)

@@ -20,7 +20,7 @@ import pandas as pd
 import gearmodal as gm
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from double_contact import CLEARANCE, FATIGUE_COLUMNS, SCENE, metrics  # noqa: E402
+from double_contact import CLEARANCE, FATIGUE_COLUMNS, ROWS_DT, SCENE, metrics  # noqa: E402
 
 from gearmodal.massscale import STUDY_TOP_FREQUENCY_HZ, study_rung  # noqa: E402
 from gearmodal.report import write_study_report  # noqa: E402
@@ -62,7 +62,7 @@ def run(out, *, duration: float = 30.0, seed: int = 1, seeds: int = 1, step_deg:
     grid = [(a, seed + k) for a in az for k in range(seeds)]
     cases = pd.DataFrame({"turbine.mounting_azimuth_deg": [a for a, _ in grid],
                           "wind.seed": [sd for _, sd in grid], "scene.t_end": duration,
-                          "turbine.gravity": gravity})
+                          "turbine.gravity": gravity, "scene.dt": ROWS_DT})
     cases["model.stages.0.carrier_bearing"] = [CLEARANCE] * len(cases)
     if top_frequency_hz is not None:
         cases["turbine.top_frequency_hz"] = float(top_frequency_hz)
