@@ -38,84 +38,155 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
               x0: np.ndarray, s0: np.ndarray, scipy_method: str = "RK45", rtol: float = 1e-6,
               atol: float = 1e-12, max_events: int = 10_000_000, azimuth0: float = 0.0,
               loads=None, **options):
+    """Integrate ``system`` from ``(x0, s0)`` over ``n_steps`` output steps of ``dt`` with
+    ``solve_ivp`` (``scipy_method``, ``rtol``, ``atol``, ``options``), restarting at every
+    contact event and scheduled stiffness change; returns the states at the output times, the
+    contact states there, the event log and ``{"nfev"}``."""
     from scipy.integrate import solve_ivp  # here: scipy.integrate and what it loads cost a
     # process 30 MB that a run of another method need not pay
 
-    n = system.n
-    turning = system.turning
-    if turning and system.asm.round is not None:
+    if system.turning and system.asm.round is not None:
         raise ModelError("method", "= 'scipy' does not integrate a round clearance on turning "
                          "geometry")
+    run = _Run(system, dt, n_steps, F_grid, x0, s0, azimuth0, loads)
 
-    def azimuth(tt):
-        return azimuth0 + system.omega * tt
+    def solve(rhs, span, x, t_eval, dense, events):
+        try:
+            return solve_ivp(rhs, span, x, method=scipy_method, t_eval=t_eval,
+                             dense_output=dense, events=events, rtol=rtol, atol=atol,
+                             **options)
+        except ValueError as err:  # scipy's own event root-finding can fail on flat events
+            raise SolveError("simulate", f"scipy ({scipy_method}) event location failed at "
+                             f"t = {span[0]:.9g} s: {err}") from None
 
-    t_grid = np.arange(n_steps + 1) * dt
-    X = np.empty((n_steps + 1, 2 * n))
-    S = np.empty((n_steps + 1, system.n_contacts), dtype=bool)
-    X[0], S[0] = x0, s0
-    x, s, t = x0.astype(float).copy(), s0.copy(), 0.0
-    events = []
-    filled = 1
-    nfev = 0
-    muted: set = set()  # contacts whose event is ignored for one short restart span
-    # contacts resting on their gap (gap and rate exactly zero, the acceleration not across):
-    # left out for a span that grows tenfold each time one is found resting again, from
-    # 1e-6 dt (a pair at rest on a flank, no loads, restarted 1e-6 dt apart for ever: 1 ms did
-    # not end in 20 s); when the span ends a contact whose gap has crossed switches then
-    resting: dict[int, float] = {}  # contact -> time its event is armed again
-    rest_span: dict[int, float] = {}  # contact -> its last resting span
-    nc = system.n_contacts
-    rd = _Round(system)
-    sr = rd.radius(x) > rd.c  # round clearances in contact (indices nc + b in events)
-    # alternating mesh stiffness: the solver restarts at every scheduled change
-    ks = np.array(system.stiffness_at(azimuth0), dtype=float)
-    sched_t, sched_e, sched_k = system.schedule(azimuth0, n_steps * dt)
-    ip = 0
-    while filled <= n_steps:
-        while ip < len(sched_t) and sched_t[ip] <= t + 1e-13 * dt:
-            ks[sched_e[ip]] = sched_k[ip]
-            ip += 1
-        woken = [e for e, tw in resting.items() if tw <= t]
-        if woken:  # armed again: a gap that crossed while left out switches now
-            pw, rw = system.penetration(x, azimuth(t)), system.rate(x, azimuth(t))
-            wvw = system.velocity_term(x, azimuth(t))
-            for e in woken:
-                del resting[e]
-                if (pw[e] > 0) != s[e]:
-                    s = s.copy()
-                    s[e] = not s[e]
-                    rest_span.pop(e, None)
-                    force = ks[e] * max(pw[e], 0.0) + system.c[e] * wvw[e] if s[e] else 0.0
-                    events.append((float(t), int(e), not s[e], bool(s[e]), float(rw[e]),
-                                   float(force)))
-        A, f = system.first_order(s, ks)
+    while run.filled <= n_steps:
+        run.apply_schedule()
+        run.wake()
+        rhs = run.rhs()
+        idx = [e for e in range(run.nc + run.rd.nr)
+               if e not in run.muted and e not in run.resting]
+        t_stop, t_eval, extra = run.span_end()
+        sol = solve(rhs, (run.t, t_stop), run.x, None if run.muted else
+                    (np.append(t_eval, t_stop) if extra else t_eval), bool(run.muted),
+                    run.event_functions(idx) or None)
+        run.nfev += sol.nfev
+        if not sol.success and sol.status != 1:
+            raise SolveError("simulate", f"scipy ({scipy_method}) failed: {sol.message}")
+        run.keep_rows(sol, t_eval, t_stop, extra)
+        if sol.status != 1:
+            if run.muted:  # the short muted span ended without an event: continue normally
+                run.end_muted(sol, t_stop)
+                continue
+            if t_stop < run.t_grid[-1]:  # at a scheduled stiffness change
+                run.x, run.t = np.asarray(sol.y)[:, -1].copy(), float(t_stop)
+                continue
+            break
+        run.at_event(sol, idx, rhs)
+        if len(run.events) > max_events:
+            raise SolveError("simulate", f"scipy: more than {max_events} events")
+    return run.X, run.S, run.events, {"nfev": run.nfev}
 
-        sr_now = sr.copy()  # the round clearances' state over this restart span
 
-        ks_now = ks.copy()
+class _Run:
+    """The state of one :func:`run_scipy` run between its restarts: the solution so far (rows
+    ``X``, ``S``, the event log), the current point ``(t, x)`` and contact state ``s`` (and the
+    round clearances' ``sr``), the stiffness schedule, and the contacts left out of a span:
+    ``muted`` (switched while tangent: left out for 1e-6 dt after the restart) and ``resting``
+    (on their gap with gap and rate exactly zero and the acceleration not across: left out for
+    a span that grows tenfold each time one is found resting again, from 1e-6 dt: a pair at
+    rest on a flank, no loads, restarted 1e-6 dt apart for ever: 1 ms did not end in 20 s;
+    when the span ends a contact whose gap has crossed switches then)."""
 
-        def rhs(ti, xx, A=A, f=f, Minv=system.Minv, sr=sr_now, s=s, ks=ks_now):
+    def __init__(self, system, dt, n_steps, F_grid, x0, s0, azimuth0, loads):
+        self.system, self.dt, self.n_steps, self.F_grid = system, dt, n_steps, F_grid
+        self.azimuth0, self.loads = azimuth0, loads
+        self.n, self.nc, self.turning = system.n, system.n_contacts, system.turning
+        self.t_grid = np.arange(n_steps + 1) * dt
+        self.X = np.empty((n_steps + 1, 2 * self.n))
+        self.S = np.empty((n_steps + 1, self.nc), dtype=bool)
+        self.X[0], self.S[0] = x0, s0
+        self.x, self.s, self.t = x0.astype(float).copy(), s0.copy(), 0.0
+        self.events: list = []
+        self.filled, self.nfev = 1, 0
+        self.muted: set = set()
+        self.resting: dict[int, float] = {}  # contact -> time its event is armed again
+        self.rest_span: dict[int, float] = {}  # contact -> its last resting span
+        self.rd = _Round(system)
+        self.sr = self.rd.radius(self.x) > self.rd.c  # round clearances in contact
+        # alternating mesh stiffness: the solver restarts at every scheduled change
+        self.ks = np.array(system.stiffness_at(azimuth0), dtype=float)
+        self.sched = system.schedule(azimuth0, n_steps * dt)
+        self.ip = 0
+
+    def azimuth(self, tt):
+        return self.azimuth0 + self.system.omega * tt
+
+    def apply_schedule(self) -> None:
+        """The stiffness changes scheduled up to now."""
+        sched_t, sched_e, sched_k = self.sched
+        while self.ip < len(sched_t) and sched_t[self.ip] <= self.t + 1e-13 * self.dt:
+            self.ks[sched_e[self.ip]] = sched_k[self.ip]
+            self.ip += 1
+
+    def _flip(self, e, p, r, wv, t) -> bool:
+        """Switch contact ``e`` to the side of its gap ``p`` and log it (rate ``r``, velocity
+        term ``wv``), where it no longer matches; whether it switched."""
+        if (p[e] > 0) != self.s[e]:
+            self.s = self.s.copy()
+            self.s[e] = not self.s[e]
+            force = (self.ks[e] * max(p[e], 0.0) + self.system.c[e] * wv[e]) if self.s[e] \
+                else 0.0
+            self.events.append((float(t), int(e), not self.s[e], bool(self.s[e]),
+                                float(r[e]), float(force)))
+            return True
+        return False
+
+    def wake(self) -> None:
+        """Resting contacts armed again: a gap that crossed while left out switches now."""
+        woken = [e for e, tw in self.resting.items() if tw <= self.t]
+        if not woken:
+            return
+        sy, az = self.system, self.azimuth(self.t)
+        p, r, wv = sy.penetration(self.x, az), sy.rate(self.x, az), sy.velocity_term(self.x, az)
+        for e in woken:
+            del self.resting[e]
+            if self._flip(e, p, r, wv, self.t):
+                self.rest_span.pop(e, None)
+
+    def rhs(self):
+        """The right-hand side over the coming span (its contact states and stiffnesses)."""
+        sy, n, dt, n_steps, F_grid = self.system, self.n, self.dt, self.n_steps, self.F_grid
+        loads, turning, rd, azimuth = self.loads, self.turning, self.rd, self.azimuth
+        A, f = sy.first_order(self.s, self.ks)
+        Minv, sr, s, ks = sy.Minv, self.sr.copy(), self.s, self.ks.copy()  # this span's
+
+        def rhs(ti, xx, A=A, f=f):
             k = min(int(ti / dt), n_steps - 1)
             w = ti / dt - k
             u = F_grid[k] * (1 - w) + F_grid[k + 1] * w
             if loads is not None:  # loads on their own time structure, at this instant
                 u = u + force_at(loads, ti)[0]
             if turning:  # the time-varying system at this instant's azimuth
-                A, f = system.first_order(s, ks, system.at(azimuth(ti)))
-            F = system.generalized_force(u, azimuth(ti)) + f
+                A, f = sy.first_order(s, ks, sy.at(azimuth(ti)))
+            F = sy.generalized_force(u, azimuth(ti)) + f
             if rd.nr:
                 F = F + rd.force(xx, sr)
             out = A @ xx
             out[n:] += Minv @ F
             return out
+        return rhs
+
+    def event_functions(self, idx) -> list:
+        """One terminal event per contact in ``idx`` (round clearances from ``nc`` on), its
+        direction set by the contact's state."""
+        sy, n, rd, turning, azimuth = self.system, self.n, self.rd, self.turning, self.azimuth
 
         def make(e, active):
             def ev(ti, xx):
                 if turning:
-                    fr = system.at(azimuth(ti))
+                    fr = sy.at(azimuth(ti))
                     return fr["W"][e] @ xx[:n] - fr["offset"][e]
-                return system.W[e] @ xx[:n] - system.offset[e]
+                return sy.W[e] @ xx[:n] - sy.offset[e]
             ev.terminal = True
             ev.direction = -1.0 if active else 1.0
             return ev
@@ -127,122 +198,116 @@ def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             ev.direction = -1.0 if active else 1.0
             return ev
 
-        idx = [e for e in range(nc + rd.nr) if e not in muted and e not in resting]
-        evs = [make(e, bool(s[e])) if e < nc else make_round(e - nc, bool(sr[e - nc]))
-               for e in idx]
+        return [make(e, bool(self.s[e])) if e < self.nc
+                else make_round(e - self.nc, bool(self.sr[e - self.nc])) for e in idx]
+
+    def span_end(self):
+        """Where the coming span ends (the run's end, a muted span's 1e-6 dt, the next scheduled
+        change or a resting contact's waking), the output times inside it, and whether the end
+        must be returned as well (a scheduled change between output times)."""
+        t, t_grid = self.t, self.t_grid
         # a contact switched while tangent (gap and rate ~ 0) would fire again at the restart
         # point and flip forever: its event is muted over a span of 1e-6 dt after the restart
-        t_stop = min(t + 1e-6 * dt, t_grid[-1]) if muted else t_grid[-1]
-        if ip < len(sched_t):
-            t_stop = min(t_stop, sched_t[ip])
-        waking = [tr for tr in resting.values() if tr > t]
+        t_stop = min(t + 1e-6 * self.dt, t_grid[-1]) if self.muted else t_grid[-1]
+        sched_t = self.sched[0]
+        if self.ip < len(sched_t):
+            t_stop = min(t_stop, sched_t[self.ip])
+        waking = [tr for tr in self.resting.values() if tr > t]
         if waking:  # a resting contact's event is armed again there
             t_stop = min(t_stop, min(waking))
-        t_eval = t_grid[filled:]
+        t_eval = t_grid[self.filled:]
         t_eval = t_eval[t_eval <= t_stop]
         # a span ending at a scheduled change also returns the state there
-        extra = not muted and t_stop < t_grid[-1] and not (len(t_eval) and t_eval[-1] == t_stop)
-        try:
-            sol = solve_ivp(rhs, (t, t_stop), x, method=scipy_method,
-                            t_eval=None if muted else (np.append(t_eval, t_stop) if extra
-                                                        else t_eval),
-                            dense_output=bool(muted),
-                            events=evs or None, rtol=rtol, atol=atol, **options)
-        except ValueError as err:  # scipy's own event root-finding can fail on flat events
-            raise SolveError("simulate", f"scipy ({scipy_method}) event location failed at "
-                             f"t = {t:.9g} s: {err}") from None
-        nfev += sol.nfev
-        if not sol.success and sol.status != 1:
-            raise SolveError("simulate", f"scipy ({scipy_method}) failed: {sol.message}")
-        if muted:
+        extra = (not self.muted and t_stop < t_grid[-1]
+                 and not (len(t_eval) and t_eval[-1] == t_stop))
+        return t_stop, t_eval, extra
+
+    def keep_rows(self, sol, t_eval, t_stop, extra) -> None:
+        """The span's output rows (a muted span's from its dense output, up to its end)."""
+        if self.muted:
             t_end_span = sol.t_events and min((tt[0] for tt in sol.t_events if len(tt)),
                                               default=t_stop)
             t_end_span = t_stop if sol.status != 1 else t_end_span
             inside = t_eval[t_eval <= t_end_span]
             m = len(inside)
             if m:
-                X[filled:filled + m] = sol.sol(inside).T
+                self.X[self.filled:self.filled + m] = sol.sol(inside).T
         else:
             m = len(sol.t)
             if extra and m and sol.t[-1] == t_stop:
                 m -= 1  # the change's time, not an output time
             if m:
-                X[filled:filled + m] = np.asarray(sol.y)[:, :m].T
+                self.X[self.filled:self.filled + m] = np.asarray(sol.y)[:, :m].T
         if m:
-            S[filled:filled + m] = s
-            filled += m
-        if sol.status != 1:
-            if muted:  # the short muted span ended without an event: continue normally
-                x, t = np.asarray(sol.y)[:, -1].copy(), t_stop
-                # a muted contact whose state no longer matches its gap switches now
-                p, r = system.penetration(x, azimuth(t)), system.rate(x, azimuth(t))
-                wv = system.velocity_term(x, azimuth(t))
-                for e in sorted(muted):
-                    if e >= nc:
-                        sr = rd.switch(x, sr, e - nc, float(t), nc, events, check=True)
-                        continue
-                    if (p[e] > 0) != s[e]:
-                        s = s.copy()
-                        s[e] = not s[e]
-                        force = ks[e] * max(p[e], 0.0) + system.c[e] * wv[e] if s[e] \
-                            else 0.0
-                        events.append((float(t), int(e), not s[e], bool(s[e]), float(r[e]),
-                                       float(force)))
-                muted = set()
-                continue
-            if t_stop < t_grid[-1]:  # at a scheduled stiffness change
-                x, t = np.asarray(sol.y)[:, -1].copy(), float(t_stop)
-                continue
-            break
-        # the earliest event(s)
+            self.S[self.filled:self.filled + m] = self.s
+            self.filled += m
+
+    def end_muted(self, sol, t_stop) -> None:
+        """A muted span that ended without an event: a muted contact whose state no longer
+        matches its gap switches now."""
+        self.x, self.t = np.asarray(sol.y)[:, -1].copy(), t_stop
+        sy, az = self.system, self.azimuth(t_stop)
+        p, r, wv = sy.penetration(self.x, az), sy.rate(self.x, az), sy.velocity_term(self.x, az)
+        for e in sorted(self.muted):
+            if e >= self.nc:
+                self.sr = self.rd.switch(self.x, self.sr, e - self.nc, float(t_stop), self.nc,
+                                         self.events, check=True)
+            else:
+                self._flip(e, p, r, wv, t_stop)
+        self.muted = set()
+
+    def _rest(self, te, fired, rhs) -> list:
+        """No progress since the restart: a contact resting on its gap (gap and rate zero)
+        whose acceleration does not carry it across does not switch, it rests (its span grown
+        tenfold); returns the contacts that switch."""
+        sy, n, x, az = self.system, self.n, self.x, self.azimuth(te)
+        acc = rhs(te, x)[n:]
+        Wt = sy.at(az)["W"] if self.turning else sy.W
+        p0, r0 = sy.penetration(x, az), sy.rate(x, az)
+        rest = [e for e in fired if e < self.nc and p0[e] == 0.0 and r0[e] == 0.0
+                and ((Wt[e] @ acc >= 0.0) if self.s[e] else (Wt[e] @ acc <= 0.0))]
+        for e in rest:
+            self.rest_span[e] = min(10.0 * self.rest_span.get(e, 1e-7 * self.dt), self.dt)
+            self.resting[e] = min(float(te) + self.rest_span[e], float(self.t_grid[-1]))
+        return [e for e in fired if e not in rest]
+
+    def at_event(self, sol, idx, rhs) -> None:
+        """The earliest event(s) of the span: the contacts that fired (and those tied with
+        them) switch there and are logged."""
         te = min(tt[0] for tt in sol.t_events if len(tt))
         fired_k = [k for k, tt in enumerate(sol.t_events) if len(tt) and tt[0] <= te]
-        x = sol.y_events[fired_k[0]][0].copy()
+        self.x = x = sol.y_events[fired_k[0]][0].copy()
         fired = [idx[k] for k in fired_k]
-        if abs(te - t) <= 1e-12 * dt:
-            # no progress since the restart. A contact resting on its gap (gap and rate zero)
-            # whose acceleration does not carry it across does not switch: it rests until
-            # the next output time
-            acc = rhs(te, x)[n:]
-            Wt = system.at(azimuth(te))["W"] if turning else system.W
-            p0, r0 = system.penetration(x, azimuth(te)), system.rate(x, azimuth(te))
-            rest = [e for e in fired if e < nc and p0[e] == 0.0 and r0[e] == 0.0
-                    and ((Wt[e] @ acc >= 0.0) if s[e] else (Wt[e] @ acc <= 0.0))]
-            if rest:
-                for e in rest:
-                    rest_span[e] = min(10.0 * rest_span.get(e, 1e-7 * dt), dt)
-                    resting[e] = min(float(te) + rest_span[e], float(t_grid[-1]))
-                fired = [e for e in fired if e not in rest]
-                if not fired:
-                    t = float(te)
-                    continue
-            muted |= set(fired)  # tangent contacts
+        if abs(te - self.t) <= 1e-12 * self.dt:
+            fired = self._rest(te, fired, rhs)
+            if not fired:
+                self.t = float(te)
+                return
+            self.muted |= set(fired)  # tangent contacts
         else:
-            muted = set()
-        r = system.rate(x, azimuth(te))
-        wv = system.velocity_term(x, azimuth(te))
+            self.muted = set()
+        sy, nc, az = self.system, self.nc, self.azimuth(te)
+        r, wv = sy.rate(x, az), sy.velocity_term(x, az)
         # a contact at its own crossing at this instant (zero backlash: the back flank closes
         # as the front one opens) has its root at the start of the next span, which solve_ivp
         # misses once the located point's rounding has put it past the crossing: it switches
         # now, like the exact method's simultaneous roots. The window is at least the event
         # location's own tolerance (4 eps absolute and relative in time, scipy's root finder)
-        p = system.penetration(x, azimuth(te))
-        tie = np.abs(r) * max(TIE * dt, 16 * np.finfo(float).eps * (1.0 + abs(te)))
+        p = sy.penetration(x, az)
+        tie = np.abs(r) * max(TIE * self.dt, 16 * np.finfo(float).eps * (1.0 + abs(te)))
         tied = [e for e in range(nc) if e not in fired and abs(p[e]) <= tie[e]
-                and r[e] != 0 and (r[e] > 0) != bool(s[e])]
-        s = s.copy()
+                and r[e] != 0 and (r[e] > 0) != bool(self.s[e])]
+        self.s = self.s.copy()
         for e in fired + tied:
             if e >= nc:
-                sr = rd.switch(x, sr, e - nc, float(te), nc, events)
+                self.sr = self.rd.switch(x, self.sr, e - nc, float(te), nc, self.events)
                 continue
-            before = bool(s[e])
-            s[e] = not before
-            force = system.c[e] * wv[e] if s[e] else 0.0
-            events.append((float(te), int(e), before, bool(s[e]), float(r[e]), float(force)))
-        if len(events) > max_events:
-            raise SolveError("simulate", f"scipy: more than {max_events} events")
-        t = float(te)
-    return X, S, events, {"nfev": nfev}
+            before = bool(self.s[e])
+            self.s[e] = not before
+            force = sy.c[e] * wv[e] if self.s[e] else 0.0
+            self.events.append((float(te), int(e), before, bool(self.s[e]), float(r[e]),
+                                float(force)))
+        self.t = float(te)
 
 
 class _Round:
