@@ -358,10 +358,7 @@ def rating_life(load: pd.Series, speed_rpm, C: float, p: float = WOEHLER["bearin
     """ISO 281 basic rating life (F3) of a bearing of dynamic load rating ``C`` (N) under the
     radial load ``load`` (N, on a time index, s) at ``speed_rpm``: ``equivalent_load_N``,
     ``l10_million_revolutions``, ``l10_h``."""
-    if not (isinstance(C, (int, float)) and C > 0 and math.isfinite(C)):
-        raise ModelError("C", f"= {C!r}: the dynamic load rating, N > 0")
-    if not (isinstance(p, (int, float)) and 1.0 <= p <= 10.0):
-        raise ModelError("p", f"= {p!r}: the life exponent (3 ball, 10/3 roller bearings)")
+    _check_rating(C, p)
     x = np.abs(_series("load", load))
     t = np.asarray(load.index, dtype=float)
     n = np.abs(np.broadcast_to(np.asarray(speed_rpm, dtype=float), x.shape))
@@ -370,8 +367,24 @@ def rating_life(load: pd.Series, speed_rpm, C: float, p: float = WOEHLER["bearin
     if not total > 0:
         raise ModelError("speed_rpm", "the bearing makes no revolution over the load history")
     p_eq = float((np.sum(revs * x**p) / total) ** (1.0 / p))
+    return _basic_life(C, p, p_eq, total, float(t[-1] - t[0]))
+
+
+def _check_rating(C, p, name: str = "C") -> None:
+    """Refuse a dynamic load rating (the field ``name``) or life exponent outside what ISO 281
+    means."""
+    if not (isinstance(C, (int, float)) and C > 0 and math.isfinite(C)):
+        raise ModelError(name, f"= {C!r}: the dynamic load rating, N > 0")
+    if not (isinstance(p, (int, float)) and 1.0 <= p <= 10.0):
+        raise ModelError("p", f"= {p!r}: the life exponent (3 ball, 10/3 roller bearings)")
+
+
+def _basic_life(C: float, p: float, p_eq: float, revolutions: float, duration: float) -> dict:
+    """ISO 281 basic rating life (F3) at equivalent load ``p_eq`` (N) of a bearing that makes
+    ``revolutions`` in ``duration`` (s): ``L10 = (C / P_eq)^p`` million revolutions, and in
+    hours at that mean speed."""
     l10 = (C / p_eq) ** p if p_eq > 0 else math.inf
-    n_mean = total * 60.0 / float(t[-1] - t[0])
+    n_mean = revolutions * 60.0 / duration  # rpm
     return {"equivalent_load_N": p_eq, "l10_million_revolutions": l10,
             "l10_h": l10 * 1e6 / (60.0 * n_mean)}
 
@@ -547,6 +560,7 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
             and math.isfinite(planet_spin)):
         raise ModelError("planet_spin", f"= {planet_spin!r}: planet revolutions on the pin "
                          "per rotor revolution, > 0")
+    _check_rating(bearing_C, ex["bearing"], "bearing_C")
     # the DELs from the exact solution's turning points where the run has them (they do not
     # depend on the output step), else from the rows
     # (one pass over the turning points for every channel and exponent)
@@ -585,11 +599,9 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
         peq = peq.rename(index=lambda c: c[:-len(".radial")])
         short = worst = str(peq["equivalent_load_N"].idxmax())
         revs = ratio * float(peq.loc[short, "revolutions"])
-        p_eq = float(peq.loc[short, "equivalent_load_N"])
-        l10 = (bearing_C / p_eq) ** ex["bearing"] if p_eq > 0 else math.inf
-        life = {"equivalent_load_N": p_eq,
-                "l10_h": l10 * 1e6 / (60.0 * revs * 60.0 / (t_end - t_skip))}
         duration = t_end - t_skip
+        life = _basic_life(bearing_C, ex["bearing"], float(peq.loc[short, "equivalent_load_N"]),
+                           revs, duration)
     else:
         worst = max(radial, key=lambda b: float(np.mean(radial[b] ** ex["bearing"])))
         lives = {b: rating_life(radial[b], ratio * speed, bearing_C, ex["bearing"])

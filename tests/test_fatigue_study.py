@@ -82,6 +82,8 @@ def test_run_fatigue_of_a_constant_load_state():
         drivetrain_fatigue(res, bearing_C=2e6, planet_spin=0.0, t_skip=0.5)
     with pytest.raises(gm.ModelError, match="t_skip"):
         drivetrain_fatigue(res, bearing_C=2e6, planet_spin=2.5, t_skip=10.0)
+    with pytest.raises(gm.ModelError, match="bearing_C"):  # the exact path checks it too
+        drivetrain_fatigue(res, bearing_C=-2e6, planet_spin=2.5, t_skip=0.5)
 
 
 @pytest.mark.slow
