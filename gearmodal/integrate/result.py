@@ -144,7 +144,10 @@ class SimulationResult:
         when each one's force enters another level bin (the edges of
         :data:`gearmodal.fatigue.LEVELS`), located on the pieces' series as crossings are;
         index ``time`` (s), columns ``channel``, ``bin`` (the bin from that time on),
-        ``level_low_N``, ``level_high_N``, each channel's first row the run's start. What the
+        ``level_low_N``, ``level_high_N``, ``input_revolutions`` (the model input's
+        revolutions from the start), each channel's first row the run's start; rows of channel
+        ``input`` (bin -1) mark the input's revolutions at each peak bin's start and at the
+        run's end. What the
         exact load duration and revolution distributions read
         (:func:`gearmodal.fatigue.level_spectrum`): they do not depend on the output step.
         ``None`` for other methods.
@@ -846,4 +849,5 @@ SimulationResult.turning_points = _exact_property(
     "force_N), or None (see the class docstring).")
 SimulationResult.level_changes = _exact_property(
     "level_changes", "The exact level changes of the flank and radial bearing forces (time, "
-    "channel, bin, level_low_N, level_high_N), or None (see the class docstring).")
+    "channel, bin, level_low_N, level_high_N, input_revolutions), or None (see the class "
+    "docstring).")
