@@ -1693,7 +1693,6 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
     pbn = np.empty(16 * (2 * n_terms + 8), dtype=np.int64)
     paq = np.empty(16 * (2 * n_terms + 8))
     n_turn = TS.shape[0]  # channels: the contact channels, then the spring channels
-    turn_room = n_turn * (2 * n_terms + 2)  # the most points one piece can add
     toggled = 0
     dense = False
     cap = EV.shape[0]
@@ -1985,10 +1984,6 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                                  PM, PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk,
                                  counts)
                 if track and n_turn:
-                    if ntp + turn_room > TP.shape[0]:
-                        grownT = np.empty((2 * TP.shape[0] + turn_room, TP.shape[1]))
-                        grownT[:ntp] = TP[:ntp]
-                        TP = grownT
                     TP, ntp = _track_turns(Bv, nt, h, t_call + t, 1.0, s, kc, cc, off, wptr, widx,
                                        wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH,
                                        TCW, TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_,
@@ -2031,10 +2026,6 @@ def taylor_run(MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU, F, x, s, k0
                              tc_idx, FT, sptr, sidx, sval, sk, sc, chp, EP, PB, pbin, PC, PM,
                              PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk, counts)
             if track and n_turn:
-                if ntp + turn_room > TP.shape[0]:
-                    grownT = np.empty((2 * TP.shape[0] + turn_room, TP.shape[1]))
-                    grownT[:ntp] = TP[:ntp]
-                    TP = grownT
                 TP, ntp = _track_turns(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx,
                                    wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH, TCW,
                                    TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_, pe_,
