@@ -1,0 +1,66 @@
+"""The exact kernel's arguments and scratch in named bundles (:func:`.taylor.taylor_run`).
+
+Named tuples, which numba passes and unpacks as it does plain arguments: the kernel reads
+``sy.W`` where it read ``W``, with the same machine work. Arrays in a bundle are shared, not
+copied: what the kernel changes in place (the contact state ``Call.s``, the stiffness
+``System.kc``, the outputs) the caller sees. The Python side builds the argument bundles
+(:meth:`.taylor.TaylorIntegrator.run`).
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+#: The frozen system: ``M^-1 K0`` and ``M^-1 C0`` (n, n), the rows ``M^-1 w_e`` (``U``) and
+#: the gap rows ``W`` (nc, n), ``W`` by its nonzeros (``wptr``, ``widx``, ``wval``: CSR), the
+#: contacts' stiffness ``kc`` (changed in place by time events), damping ``cc`` and offsets
+#: ``off``, and ``M^-1`` times the force basis ``MinvU`` (n, m).
+System = namedtuple("System", "MK0 MC0 U W wptr widx wval kc cc off MinvU")
+
+#: The call: the generalised force ``F`` (n_steps + 1, m) on the output grid, the state ``x``
+#: and contact state ``s`` (both written back at the end), the output steps ``k0 ..
+#: n_steps - 1``, ``k_org`` (row ``j`` at time ``(j + k_org) dt``), the output step ``dt``, the
+#: piece bound ``h_max`` and term scale ``tscale`` over every state, the term table
+#: ``terms``, the tie window ``tie`` (s) and ``max_events`` per output step.
+Call = namedtuple("Call", "F x s k0 n_steps k_org dt h_max terms tscale tie max_events")
+
+#: The outputs: rows ``X`` (state) and ``S`` (contact state), the event rows ``EV`` from row
+#: ``n_ev`` on (grown by the kernel, which returns the larger array) and the work ``counts``.
+Out = namedtuple("Out", "X S EV n_ev counts")
+
+#: Scheduled stiffness changes (alternating mesh stiffness): times ``t`` from step 0,
+#: contacts ``e``, new stiffnesses ``k``, and ``pos`` (1,), the next entry (advanced in place).
+Schedule = namedtuple("Schedule", "t e k pos")
+
+#: Turning geometry (:class:`~gearmodal.integrate.periodic.Periodic`; empty arrays for a
+#: frozen system): the input speed ``om`` (rad/s) and azimuth ``psi0`` at time 0, the
+#: harmonics and their parts, and ``GT`` (H1, n, m) the turning harmonics of ``M^-1`` times
+#: the load columns.
+Turning = namedtuple("Turning", "om psi0 harm tcols krows urows ZK ZC tc_idx TW TOFF TU GT")
+
+#: Per-contact-state spectral bounds (:class:`~gearmodal.integrate.taylor.StateBound`):
+#: ``reach``, whether they are on (``per_state``), their arrays and the table of states met.
+Bound = namedtuple("Bound", "reach per_state Ksym Wl km cb kappa keys vals")
+
+#: Loads on their own time structure: knot times ``TL`` and values ``FL`` acting through
+#: ``MinvUL`` (and ``GTL`` turning), harmonic loads ``HX`` (nh, n) complex at ``HNU`` rad/s.
+Loads = namedtuple("Loads", "TL FL MinvUL GTL HX HNU")
+
+#: Exact peaks (:class:`~gearmodal.integrate.peaks.PeakTracker`): on or off (``track``), the
+#: open episodes ``EP``, the peak bins ``PB`` of ``pbin`` s, the pending pieces ``PC``,
+#: ``PM``, ``PN``, and ``t_call``: this call's start (absolute times).
+Peaks = namedtuple("Peaks", "track EP PB pbin PC PM PN t_call")
+
+#: Spring channels (a bearing's radial force): sparse rows ``sptr``, ``sidx``, ``sval`` with
+#: stiffness ``sk`` and damping ``sc``, channels ``chp`` (n_ch, 2) of row indices.
+Channels = namedtuple("Channels", "sptr sidx sval sk sc chp")
+
+#: Exact turning points (:class:`~gearmodal.integrate.turns.TurnPoints`): the contact
+#: channels ``TCH`` and their weights ``TCW``, each channel's state ``TS``, and the rows
+#: ``TP`` from row ``ntp`` (grown by the kernel, which returns the larger array).
+Turns = namedtuple("Turns", "TCH TCW TS TP ntp")
+
+#: A run advanced over several calls: ``carry`` (7,) (written at the end; empty for a call
+#: of its own), the last call's state matrices ``MKC`` and ``acc``, and ``t_span`` (2,) the
+#: call's start and end times when the caller gives them (empty otherwise).
+Chain = namedtuple("Chain", "carry MKC acc t_span")
