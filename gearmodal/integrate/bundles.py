@@ -64,3 +64,14 @@ Turns = namedtuple("Turns", "TCH TCW TS TP ntp")
 #: of its own), the last call's state matrices ``MKC`` and ``acc``, and ``t_span`` (2,) the
 #: call's start and end times when the caller gives them (empty otherwise).
 Chain = namedtuple("Chain", "carry MKC acc t_span")
+
+#: What a turning piece's series reads (:func:`~.taylor._coefficients`): the turning
+#: coordinates ``tcols``, the rows ``urows`` the turning contacts act on, the geometry's
+#: ``TW`` and ``TU`` (:data:`Turning`), and its scratch: the product's input row
+#: ``y``, the exponential series ``E`` and its lengths ``EL``, the Cauchy products ``Y``,
+#: ``Yd`` and the turning coordinates' rows ``Bt``, the turning contacts' offsets ``OFS``,
+#: stiffness ``kt``, damping ``ct`` and state ``closed``, their penetration, rate and force
+#: series ``P``, ``PD``, ``FT``, the turning loads ``GV`` and their rates ``GVS``, the harmonic
+#: loads' rows ``HF`` and the kept turning columns ``zsrc``.
+TurningWork = namedtuple(
+    "TurningWork", "tcols urows TW TU y E EL Y Yd Bt OFS kt ct closed P PD FT GV GVS HF zsrc")

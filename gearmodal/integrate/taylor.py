@@ -62,6 +62,7 @@ from .bundles import (
     Schedule,
     System,
     Turning,
+    TurningWork,
     Turns,
 )
 from .kernels import SIMULTANEOUS, _bisect_up
@@ -209,9 +210,7 @@ def _coefficients_frozen(MKC, g0, g1, q, v, h, B, y, HF, harmonic):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC, Y, Yd, Bt,
-                  TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, GVS, cturn, loads, HF, harmonic,
-                  zsrc):
+def _coefficients(MKC, g0, g1, q, v, h, B, tw, cturn, loads, harmonic):
     """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions: the frozen part by (T1) with
     the forcing terms ``g0`` (the force at the piece's start) and ``g1`` (its rate), one
     contiguous product per term with ``MKC = [M^-1 K_s, M^-1 C_s, Z]`` (``y``: scratch of its
@@ -232,7 +231,11 @@ def _coefficients(MKC, g0, g1, q, v, h, B, y, E, EL, tcols, krows, urows, ZK, ZC
     real and imaginary parts in their first axis (2, H1, n_terms, nT) and ``Bt`` (n_terms, nT)
     the turning coordinates' rows of ``B``: real, contiguous sums that vectorise. ``HF`` as
     :func:`_coefficients_frozen` (the harmonic loads, their turning products included).
-    ``zsrc``: the Z columns ``MKC`` keeps, by their place in the full layout (taylor_run)."""
+    ``zsrc``: the Z columns ``MKC`` keeps, by their place in the full layout (taylor_run).
+    The geometry's parts, the scratch and the piece's turning inputs come in the bundle ``tw``
+    (:data:`~.bundles.TurningWork`)."""
+    tcols, urows, TW, TU, y, E, EL, Y, Yd, Bt, OFS, kt, ct, closed, P, PD, FT, GV, GVS, HF, \
+        zsrc = tw
     n_terms, n = B.shape
     n2 = n - n % 2
     width = MKC.shape[1]  # 2 n, or more with the turning columns
@@ -1681,6 +1684,8 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
     gR = np.empty(n)  # the force's rate over the piece (grid and knots)
     harmonic = HX.shape[0] > 0
     HF = np.zeros((n_terms, n))
+    tw = TurningWork(tcols, urows, TW, TU, ysc, E, EL, Y, Yd, Bt, OFS, kt, ct, closed, P, PD, FT,
+                     GV, VST, HF, zsrc)
     # exact peaks: scratch of _track_peaks
     cs1 = np.empty(n)
     csd = np.empty(n)
@@ -1878,9 +1883,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                 if turning:
                     # (a name, not an expression, in the call: numba's bytecode limit)
                     turning_loads = loads or loads_knots
-                    _coefficients(MKC, g0, gR, q, v, h, Bv, ysc, E, EL, tcols, krows, urows, ZK,
-                                  ZC, Y, Yd, Bt, TW, OFS, TU, kt, ct, closed, P, PD, FT, GV, VST,
-                                  cturn, turning_loads, HF, harmonic, zsrc)
+                    _coefficients(MKC, g0, gR, q, v, h, Bv, tw, cturn, turning_loads, harmonic)
                 else:
                     _coefficients_frozen(MKC, g0, gR, q, v, h, Bv, ysc, HF, harmonic)
                 if _converged(Bv, TAIL):
