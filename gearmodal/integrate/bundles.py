@@ -51,9 +51,13 @@ Loads = namedtuple("Loads", "TL FL MinvUL GTL HX HNU")
 #: ``PM``, ``PN``, and ``t_call``: this call's start (absolute times).
 Peaks = namedtuple("Peaks", "track EP PB pbin PC PM PN t_call")
 
-#: Spring channels (a bearing's radial force): sparse rows ``sptr``, ``sidx``, ``sval`` with
-#: stiffness ``sk`` and damping ``sc``, channels ``chp`` (n_ch, 2) of row indices.
-Channels = namedtuple("Channels", "sptr sidx sval sk sc chp")
+#: Sparse rows (CSR): row ``j``'s columns ``idx[ptr[j]:ptr[j + 1]]`` and values ``val``.
+Sparse = namedtuple("Sparse", "ptr idx val")
+
+#: Spring channels (a bearing's radial force): the springs' sparse rows ``rows``
+#: (:data:`Sparse`) with stiffness ``sk`` and damping ``sc``, channels ``chp`` (n_ch, 2) of
+#: row indices (a second index -1: one row).
+Channels = namedtuple("Channels", "rows sk sc chp")
 
 #: Exact turning points (:class:`~gearmodal.integrate.turns.TurnPoints`): the contact
 #: channels ``TCH`` and their weights ``TCW``, each channel's state ``TS``, and the rows
@@ -75,3 +79,27 @@ Chain = namedtuple("Chain", "carry MKC acc t_span")
 #: loads' rows ``HF`` and the kept turning columns ``zsrc``.
 TurningWork = namedtuple(
     "TurningWork", "tcols urows TW TU y E EL Y Yd Bt OFS kt ct closed P PD FT GV GVS HF zsrc")
+
+#: What the tracking reads of the contacts (:func:`~.taylor._track_peaks`,
+#: :func:`~.taylor._track_turns`): the contact state ``s``, the contacts that jumped at the
+#: piece's start ``jumped``, stiffness ``kc``, damping ``cc``, offsets ``off``, the gap rows
+#: ``rows`` (:data:`Sparse`), the turning contacts ``tc_idx`` and their force series ``FT``.
+ContactRows = namedtuple("ContactRows", "s jumped kc cc off rows tc_idx FT")
+
+#: A polynomial search's scratch (:func:`~.taylor.poly_max`, :func:`~.taylor.poly_turns`):
+#: ``d``, ``e`` of the series' width, ``wflat`` the subdivision's rows, ``stk`` its stack.
+Search = namedtuple("Search", "d e wflat stk")
+
+#: The peak search's scratch (:func:`~.taylor._track_peaks`): the coordinates' tail sums
+#: ``tq``, ``td`` of the first bound, the force series ``fx``, ``fy``, a radial channel's
+#: square ``P``, and ``tmp``.
+PeakWork = namedtuple("PeakWork", "tq td fx fy P tmp")
+
+#: The turning channels (:class:`~gearmodal.integrate.turns.TurnPoints`): contact channels
+#: ``TCH`` and their weights ``TCW``, and every channel's state ``TS``.
+TurnChannels = namedtuple("TurnChannels", "TCH TCW TS")
+
+#: The turning points' scratch (:func:`~.taylor._track_turns`): the series ``fx``, ``fy``,
+#: ``P``, ``tmp``, the extrema ``taus``, the input's speed ``spd`` and revolutions ``rev``,
+#: and the load integrals' nodes, weights, bins and values ``XN``, ``WN``, ``BN``, ``AQ``.
+TurnWork = namedtuple("TurnWork", "fx fy P tmp taus spd rev XN WN BN AQ")

@@ -27,6 +27,7 @@ import pandas as pd
 
 from ..errors import ModelError
 from ..fatigue import LOAD_INTEGRALS
+from .bundles import Peaks, Search
 from .turns import TurnPoints
 
 __all__ = ["PEAK_BIN", "PeakTracker", "peak_table"]
@@ -146,9 +147,9 @@ class PeakTracker:
         if not np.any(self.PM[:, 0] != -np.inf):
             return
         w = self.PC.shape[1]
-        resolve_all(len(self.names), self.PC, self.PM, self.PN, self.PB, self.EP,
-                    np.zeros(w), np.zeros(w), np.empty((DEPTH + 5) * w),
-                    np.empty((2, DEPTH + 1)), np.zeros(7, dtype=np.int64))
+        resolve_all(len(self.names), Peaks(*self.args(), 0.0),
+                    Search(np.zeros(w), np.zeros(w), np.empty((DEPTH + 5) * w),
+                           np.empty((2, DEPTH + 1))), np.zeros(7, dtype=np.int64))
 
     def rows(self) -> tuple:
         return (self.sptr, self.sidx, self.sval, self.sk, self.sc, self.chp)

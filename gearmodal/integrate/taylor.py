@@ -56,14 +56,20 @@ from .bundles import (
     Call,
     Chain,
     Channels,
+    ContactRows,
     Loads,
     Out,
     Peaks,
+    PeakWork,
     Schedule,
+    Search,
+    Sparse,
     System,
+    TurnChannels,
     Turning,
     TurningWork,
     Turns,
+    TurnWork,
 )
 from .kernels import SIMULTANEOUS, _bisect_up
 from .kernels import _poly as _hpoly
@@ -766,11 +772,15 @@ def _row_series(Bv, nt, h, ptr, idx, val, j, k_, c_, off_, out, tmp):
 
 
 @numba.njit(cache=True, inline="always")
-def _radial_square(Bv, nt, h, sptr, sidx, sval, sk, sc, rx, ry, fx, fy, P, tmp):
+def _radial_square(Bv, nt, h, chans, rx, ry, fx, fy, P, tmp):
     """The series of a spring channel's squared magnitude over the piece ``Bv``: ``F_x^2 +
     F_y^2`` of sparse rows ``rx`` and ``ry`` (``ry < 0``: ``F_x^2`` alone) into ``P``; returns
     its number of terms, its last terms, together below rounding of its size, left out (a
-    degree near the series' own instead of twice it). ``fx``, ``fy``: the components'."""
+    degree near the series' own instead of twice it). ``fx``, ``fy``: the components'; the
+    rows, stiffness and damping of ``chans`` (:data:`~.bundles.Channels`)."""
+    sptr, sidx, sval = chans.rows
+    sk = chans.sk
+    sc = chans.sc
     two = ry >= 0
     _row_series(Bv, nt, h, sptr, sidx, sval, rx, sk[rx], sc[rx], 0.0, fx, tmp)
     if two:
@@ -800,11 +810,14 @@ LOW_TERMS = 16
 
 
 @numba.njit(cache=True, inline="always")
-def _low_bound(Bv, L, h, te, ptr, idx, val, j, k_, c_, off_, tq, td, tmp, e, upper):
+def _low_bound(Bv, L, h, te, rows, j, law, tq, td, tmp, e, upper):
     """A bound over ``[0, te]`` of the piece of the row's force ``k_ (w . q - off_) + c_ w .
-    v`` (sparse row ``j``; ``upper``: of the force, else of its magnitude): the Bernstein
-    coefficients of its series' first ``L`` terms (convex hull) plus the magnitudes of the rest
-    (``tq``, ``td``: each coordinate's sums of ``|b_k|`` and ``k |b_k|`` from ``L`` on)."""
+    v`` (row ``j`` of ``rows``, :data:`~.bundles.Sparse`; ``law``: ``(k_, c_, off_)``;
+    ``upper``: of the force, else of its magnitude): the Bernstein coefficients of its series'
+    first ``L`` terms (convex hull) plus the magnitudes of the rest (``tq``, ``td``: each
+    coordinate's sums of ``|b_k|`` and ``k |b_k|`` from ``L`` on)."""
+    ptr, idx, val = rows
+    k_, c_, off_ = law
     _row_series(Bv, L, h, ptr, idx, val, j, k_, c_, off_, e, tmp)  # the first L terms
     rest = 0.0
     for jj in range(ptr[j], ptr[j + 1]):
@@ -846,10 +859,14 @@ def _record(v, tv, b, col, e, PB, EP):
 
 
 @numba.njit(cache=True)
-def _bin_max(P, t_abs, h, te, b0, b1, pbin, PB, col, EP, e, root, d, ee, wflat, stk, counts):
-    """The maximum of ``P`` (over the piece from ``t_abs`` (s), length ``h``, up to ``te``) in
-    each peak bin it touches into ``PB[b, col]`` and, for a contact (``e >= 0``), into its
-    episode's ``EP[e]``; ``root``: ``P`` is a square, the channel its root."""
+def _bin_max(P, span, b0, b1, col, e, root, pk, sw, counts):
+    """The maximum of ``P`` (over the piece ``span = (t_abs, h, te)``: from ``t_abs`` (s),
+    length ``h``, up to ``te``) in each peak bin it touches into ``PB[b, col]`` and, for a
+    contact (``e >= 0``), into its episode's ``EP[e]`` (of ``pk``, :data:`~.bundles.Peaks`);
+    ``root``: ``P`` is a square, the channel its root; ``sw``: :data:`~.bundles.Search`."""
+    t_abs, h, te = span
+    pbin, PB, EP = pk.pbin, pk.PB, pk.EP
+    d, ee, wflat, stk = sw
     for b in range(b0, b1 + 1):
         ta = 0.0 if b == b0 else (b * pbin - t_abs) / h
         tb = te if b == b1 else ((b + 1) * pbin - t_abs) / h
@@ -861,10 +878,12 @@ def _bin_max(P, t_abs, h, te, b0, b1, pbin, PB, col, EP, e, root, d, ee, wflat, 
 
 
 @numba.njit(cache=True)
-def resolve_peak(col, e, root, PC, PM, PN, PB, EP, d, ee, wflat, stk, counts):
+def resolve_peak(col, e, root, pk, sw, counts):
     """Search the pending piece of channel ``col`` (:func:`_track_peaks`) for its maximum into
-    its bin and, for a contact ``e >= 0``, its episode; ``root``: a radial channel (its
-    square pending)."""
+    its bin and, for a contact ``e >= 0``, its episode (of ``pk``, :data:`~.bundles.Peaks`);
+    ``root``: a radial channel (its square pending); ``sw``: :data:`~.bundles.Search`."""
+    PC, PM, PN, PB, EP = pk.PC, pk.PM, pk.PN, pk.PB, pk.EP
+    d, ee, wflat, stk = sw
     if PM[col, 0] == -np.inf:
         return
     PM[col, 0] = -np.inf
@@ -877,23 +896,25 @@ def resolve_peak(col, e, root, PC, PM, PN, PB, EP, d, ee, wflat, stk, counts):
 
 
 @numba.njit(cache=True)
-def resolve_all(nc, PC, PM, PN, PB, EP, d, ee, wflat, stk, counts):
+def resolve_all(nc, pk, sw, counts):
     """Every pending piece searched (the end of a run, a re-basing)."""
-    for col in range(PM.shape[0]):
-        resolve_peak(col, col if col < nc else -1, col >= nc, PC, PM, PN, PB, EP, d, ee, wflat,
-                     stk, counts)
+    for col in range(pk.PM.shape[0]):
+        resolve_peak(col, col if col < nc else -1, col >= nc, pk, sw, counts)
 
 
 @numba.njit(cache=True, inline="always")
-def _offer(col, e, root, P, m, t_abs, h, te, b, v, tau, PC, PM, PN, PB, EP, d, ee, wflat, stk,
-           counts):
+def _offer(col, e, root, P, m, span, b, v, tau, pk, sw, counts):
     """One piece of channel ``col`` in one bin ``b``: ``P`` (m terms; a radial channel's
     square) with its larger end value ``v`` at ``tau`` (the channel's value, not squared).
     The end value is taken at once; an interior maximum matters only above what the bin (and
     the episode) hold, so the piece is searched only if its bound (:func:`_upper`) exceeds
     that, and lazily: it waits as the channel's pending piece, dropped as soon as a later end
     value rises above its bound (a rising force: nearly every piece), searched when a second
-    one needs the place, at the bin's or episode's end and at the run's."""
+    one needs the place, at the bin's or episode's end and at the run's. ``span``: the piece
+    ``(t_abs, h, te)``; ``pk``: :data:`~.bundles.Peaks`; ``sw``: :data:`~.bundles.Search`."""
+    t_abs, h, te = span
+    PC, PM, PN, PB, EP = pk.PC, pk.PM, pk.PN, pk.PB, pk.EP
+    ee = sw.e
     _record(v, t_abs + tau * h, b, col, e, PB, EP)
     level = _level(PB, EP, b, col, e, root)
     if PM[col, 0] != -np.inf and PM[col, 0] <= level:
@@ -903,7 +924,7 @@ def _offer(col, e, root, P, m, t_abs, h, te, b, v, tau, PC, PM, PN, PB, EP, d, e
     if ub <= level:
         return
     if PM[col, 0] != -np.inf:
-        resolve_peak(col, e, root, PC, PM, PN, PB, EP, d, ee, wflat, stk, counts)
+        resolve_peak(col, e, root, pk, sw, counts)
         level = _level(PB, EP, b, col, e, root)
         if ub <= level:
             return
@@ -918,9 +939,7 @@ def _offer(col, e, root, P, m, t_abs, h, te, b, v, tau, PC, PM, PN, PB, EP, d, e
 
 
 @numba.njit(cache=True)
-def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx, FT, sptr,
-                 sidx, sval, sk, sc, chp, EP, PB, pbin, PC, PM, PN, tq, td, fx, fy, P, tmp, d,
-                 ee, wflat, stk, counts):
+def _track_peaks(Bv, nt, span, con, chans, pk, pw, sw, counts):
     """Exact maxima over the piece ``Bv`` (from absolute time ``t_abs``, length ``h``, up to
     ``te`` of it: the piece's end or its first event) of every closed contact's force (into its
     episode ``EP`` and the peak bins ``PB[:, e]``) and of every spring channel's magnitude
@@ -930,7 +949,17 @@ def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
     says (``PC``, ``PM``, ``PN``: each channel's pending piece: its terms, ``(bound, t_abs, h,
     te, bin)`` (bound ``-inf``: none) and its number of terms). ``counts[4]``: rows offered
     (:func:`_offer`), ``counts[5]``: pieces searched (:func:`poly_max`), ``counts[6]``: of
-    those, searched for interior maxima."""
+    those, searched for interior maxima. The piece is ``span = (t_abs, h, te)``; the rest
+    comes in the bundles of :mod:`gearmodal.integrate.bundles`: ``con`` (ContactRows),
+    ``chans`` (Channels), ``pk`` (Peaks), ``pw`` (PeakWork), ``sw`` (Search)."""
+    t_abs, h, te = span
+    s, kc, cc, off, wrows, tc_idx, FT = con.s, con.kc, con.cc, con.off, con.rows, con.tc_idx, \
+        con.FT
+    wptr, widx, wval = wrows
+    srows, sk, sc, chp = chans
+    EP, PB, pbin, PM = pk.EP, pk.PB, pk.pbin, pk.PM
+    tq, td, fx, fy, P, tmp = pw
+    ee = sw.e
     n = Bv.shape[1]
     nc = off.shape[0]
     nb = PB.shape[0]
@@ -948,8 +977,7 @@ def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
     b1 = min(int((t_abs + te * h) // pbin), nb - 1)
     for col in range(PM.shape[0]):  # a pending piece of an earlier bin: its bin is done
         if PM[col, 0] != -np.inf and (int(PM[col, 4]) != b0 or b1 != b0):
-            resolve_peak(col, col if col < nc else -1, col >= nc, PC, PM, PN, PB, EP, d, ee,
-                         wflat, stk, counts)
+            resolve_peak(col, col if col < nc else -1, col >= nc, pk, sw, counts)
     for e in range(nc):
         if not s[e]:
             continue
@@ -961,8 +989,8 @@ def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
             if tc_idx[j] == e:
                 et = j
         if et < 0:
-            if thr > -np.inf and _low_bound(Bv, L, h, te, wptr, widx, wval, e, kc[e], cc[e],
-                                            off[e], tq, td, tmp, ee, True) <= thr:
+            if thr > -np.inf and _low_bound(Bv, L, h, te, wrows, e, (kc[e], cc[e], off[e]),
+                                            tq, td, tmp, ee, True) <= thr:
                 continue
             _row_series(Bv, nt, h, wptr, widx, wval, e, kc[e], cc[e], off[e], fx, tmp)
         else:  # a turning contact: its force series (T2)
@@ -974,12 +1002,10 @@ def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
             for k in range(nt - 2, -1, -1):
                 v1 = v1 * te + fx[k]
             v, tau = (v1, te) if v1 > v0 else (v0, 0.0)
-            _offer(e, e, False, fx, nt, t_abs, h, te, b0, v, tau, PC, PM, PN, PB, EP, d, ee,
-                   wflat, stk, counts)
+            _offer(e, e, False, fx, nt, span, b0, v, tau, pk, sw, counts)
         else:
             counts[5] += 1
-            _bin_max(fx[:nt], t_abs, h, te, b0, b1, pbin, PB, e, EP, e, False, d, ee, wflat,
-                     stk, counts)
+            _bin_max(fx[:nt], span, b0, b1, e, e, False, pk, sw, counts)
     for ch in range(chp.shape[0]):
         col = nc + ch
         thr = PB[b0, col, 0]
@@ -988,29 +1014,26 @@ def _track_peaks(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
         two = chp[ch, 1] >= 0
         if thr > 0.0:
             r = chp[ch, 0]
-            bx = _low_bound(Bv, L, h, te, sptr, sidx, sval, r, sk[r], sc[r], 0.0, tq, td, tmp,
-                            ee, False)
+            bx = _low_bound(Bv, L, h, te, srows, r, (sk[r], sc[r], 0.0), tq, td, tmp, ee,
+                            False)
             by = 0.0
             if two:
                 r = chp[ch, 1]
-                by = _low_bound(Bv, L, h, te, sptr, sidx, sval, r, sk[r], sc[r], 0.0, tq, td,
-                                tmp, ee, False)
+                by = _low_bound(Bv, L, h, te, srows, r, (sk[r], sc[r], 0.0), tq, td, tmp,
+                                ee, False)
             if bx * bx + by * by <= thr * thr:
                 continue
-        m2 = _radial_square(Bv, nt, h, sptr, sidx, sval, sk, sc, chp[ch, 0], chp[ch, 1], fx,
-                            fy, P, tmp)
+        m2 = _radial_square(Bv, nt, h, chans, chp[ch, 0], chp[ch, 1], fx, fy, P, tmp)
         if b0 == b1:
             v0 = P[0]
             v1 = P[m2 - 1]
             for k in range(m2 - 2, -1, -1):
                 v1 = v1 * te + P[k]
             v, tau = (v1, te) if v1 > v0 else (v0, 0.0)
-            _offer(col, -1, True, P, m2, t_abs, h, te, b0, math.sqrt(max(v, 0.0)), tau, PC, PM,
-                   PN, PB, EP, d, ee, wflat, stk, counts)
+            _offer(col, -1, True, P, m2, span, b0, math.sqrt(max(v, 0.0)), tau, pk, sw, counts)
         else:
             counts[5] += 1
-            _bin_max(P[:m2], t_abs, h, te, b0, b1, pbin, PB, col, EP, -1, True, d, ee, wflat,
-                     stk, counts)
+            _bin_max(P[:m2], span, b0, b1, col, -1, True, pk, sw, counts)
 
 
 # -- exact turning points (DESIGN 3.2; issue 34 item 3: fatigue from the exact solution) ---------
@@ -1159,11 +1182,14 @@ def _level_jump(ch, t, v, TS, TP, ntp, rev):
 
 
 @numba.njit(cache=True)
-def _level_segment(ch, P, m, root, t_abs, h, ta, tb, vb, TS, TP, ntp, g, rev):
-    """Channel ``ch`` over ``[ta, tb]`` of a piece (``P``: its series of ``m`` terms, monotone
-    there; a radial channel's square with ``root``), ending at value ``vb``: every edge it
-    passes, located on the series (Newton and bisection, :func:`_refine`, to adjacent floats)
-    and written as a level change (:func:`_level_row`). ``g``: scratch of ``m``."""
+def _level_segment(ch, P, m, root, span, seg, TS, TP, ntp, g, rev):
+    """Channel ``ch`` over ``seg = (ta, tb, vb)``: ``[ta, tb]`` of the piece ``span = (t_abs,
+    h, te)`` (``P``: its series of ``m`` terms, monotone there; a radial channel's square with
+    ``root``), ending at value ``vb``: every edge it passes, located on the series (Newton and
+    bisection, :func:`_refine`, to adjacent floats) and written as a level change
+    (:func:`_level_row`). ``g``: scratch of ``m``."""
+    t_abs, h = span[0], span[1]
+    ta, tb, vb = seg
     if TS[ch, 6] < 2.0:
         return ntp
     b_new = _level_bin(TS, ch, vb)
@@ -1195,14 +1221,15 @@ def _level_segment(ch, P, m, root, t_abs, h, ta, tb, vb, TS, TP, ntp, g, rev):
 
 
 @numba.njit(cache=True)
-def _piece_turns(ch, P, m, t_abs, h, te, jump, root, TS, TP, ntp, taus, d, e, wflat, stk,
-                 rev):
+def _piece_turns(ch, P, m, span, jump, root, TS, TP, ntp, taus, sw, rev):
     """Channel ``ch`` over one piece (``P``: its series of ``m`` terms, a radial channel's
     square with ``root``): its start value where the channel jumped there, its interior
     extrema (:func:`poly_turns`) and its end value, through :func:`_feed`; with level edges
     (``TS[ch, 6]``), every change of its level bin (:func:`_level_jump`,
     :func:`_level_segment`: the piece is monotone between its extrema). Returns the rows of
-    ``TP`` used."""
+    ``TP`` used. ``span``: the piece ``(t_abs, h, te)``; ``sw``: :data:`~.bundles.Search`."""
+    t_abs, h, te = span
+    d, e, wflat, stk = sw
     if jump:
         v = P[0]
         v = math.sqrt(max(v, 0.0)) if root else v
@@ -1229,7 +1256,7 @@ def _piece_turns(ch, P, m, t_abs, h, te, jump, root, TS, TP, ntp, taus, d, e, wf
         v = _hpoly(P[:m], tb)
         v = math.sqrt(max(v, 0.0)) if root else v
         if levels and _level_bin(TS, ch, v) != TS[ch, 5]:
-            ntp = _level_segment(ch, P, m, root, t_abs, h, ta, tb, v, TS, TP, ntp, d, rev)
+            ntp = _level_segment(ch, P, m, root, span, (ta, tb, v), TS, TP, ntp, d, rev)
         ntp = _feed(ch, t_abs + tb * h, v, TS, TP, ntp)
         ta = tb
     return ntp
@@ -1347,9 +1374,7 @@ def _load_integrals(P, m, XN, WN, BN, cnt, PB, col, AQ):
 
 
 @numba.njit(cache=True)
-def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx, FT, sptr,
-                 sidx, sval, sk, sc, chp, TCH, TCW, TS, jumped, TP, ntp, fx, fy, P, tmp, taus,
-                 d, ee, wflat, stk, PB, pbin, spd, rev, XN, WN, BN, AQ):
+def _track_turns(Bv, nt, span, con, chans, tch, TP, ntp, tw, sw, PB, pbin):
     """The turning points over the piece ``Bv`` (from absolute time ``t_abs``, length ``h``, up
     to ``te`` of it) of every turning channel: the contact channels ``TCH`` (up to two
     contacts each, weights ``TCW``: a force column of one contact or a dead band's two sides;
@@ -1362,7 +1387,18 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
     from the run's start, rad, at the piece's start, its antiderivative's number of terms and
     terms, the number of the speed's zeros in the piece and the zeros: :func:`_revolutions`,
     what the level changes carry). Returns ``TP`` (grown first to hold every row the piece
-    may add) and its rows used."""
+    may add) and its rows used. The piece is ``span = (t_abs, h, te)``; the rest comes in the
+    bundles of :mod:`gearmodal.integrate.bundles`: ``con`` (ContactRows), ``chans``
+    (Channels), ``tch`` (TurnChannels), ``tw`` (TurnWork), ``sw`` (Search)."""
+    t_abs, h, te = span
+    s, jumped, kc, cc, off, tc_idx, FT = con.s, con.jumped, con.kc, con.cc, con.off, \
+        con.tc_idx, con.FT
+    wptr, widx, wval = con.rows
+    srows, sk, sc, chp = chans
+    sptr, sidx, sval = srows
+    TCH, TCW, TS = tch
+    fx, fy, P, tmp, taus, spd, rev, XN, WN, BN, AQ = tw
+    d, ee, wflat, stk = sw
     nct = TCH.shape[0]
     t1 = t_abs + te * h
     # room for every row the piece may add: each channel's turning points and, with level
@@ -1433,8 +1469,7 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
                     fx[k] = FT[et, k]
             for k in range(nt):
                 P[k] += TCW[ch, j] * fx[k]
-        ntp = _piece_turns(ch, P, nt, t_abs, h, te, jump, False, TS, TP, ntp, taus, d, ee,
-                           wflat, stk, rev)
+        ntp = _piece_turns(ch, P, nt, span, jump, False, TS, TP, ntp, taus, sw, rev)
     nq = 0
     if ns and TS.shape[0] > nct:  # the load integrals' nodes (the same for every channel)
         need = GAUSS_X.shape[0] * (int(rev[2 + ns + 1]) + int(te * h / pbin) + 2)
@@ -1448,12 +1483,10 @@ def _track_turns(Bv, nt, h, t_abs, te, s, kc, cc, off, wptr, widx, wval, tc_idx,
         ch = nct + r
         jump = TS[ch, 4] != 0.0 or TS[ch, 3] == 0.0
         TS[ch, 4] = 0.0
-        m2 = _radial_square(Bv, nt, h, sptr, sidx, sval, sk, sc, chp[r, 0], chp[r, 1], fx, fy,
-                            P, tmp)
+        m2 = _radial_square(Bv, nt, h, chans, chp[r, 0], chp[r, 1], fx, fy, P, tmp)
         if nq:
             _load_integrals(P, m2, XN, WN, BN, nq, PB, off.shape[0] + r, AQ)
-        ntp = _piece_turns(ch, P, m2, t_abs, h, te, jump, True, TS, TP, ntp, taus, d, ee,
-                           wflat, stk, rev)
+        ntp = _piece_turns(ch, P, m2, span, jump, True, TS, TP, ntp, taus, sw, rev)
     if rev[1] > 0.0:  # the revolutions at the next piece's start
         TS[0, 9] = _revolutions(rev, te)
     return TP, ntp
@@ -1569,7 +1602,6 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
     reach, per_state, Ksym, Wl, km, cb, kappa, rho_keys, rho_vals = bound
     TL, FL, MinvUL, GTL, HX, HNU = loads
     track, EP, PB, pbin, PC, PM, PN, t_call = peaks
-    sptr, sidx, sval, sk, sc, chp = chans
     TCH, TCW, TS, TP, ntp = turns
     carry, MKC_in, acc_in, t_span = chain
     N = x.shape[0]
@@ -1706,6 +1738,12 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
     pbn = np.empty(16 * (2 * n_terms + 8), dtype=np.int64)
     paq = np.empty(16 * (2 * n_terms + 8))
     n_turn = TS.shape[0]  # channels: the contact channels, then the spring channels
+    # what the tracking reads, bundled once (bundles.py)
+    con = ContactRows(s, jumped, kc, cc, off, Sparse(wptr, widx, wval), tc_idx, FT)
+    pw = PeakWork(cs1, csd, pfx, pfy, pP, ptmp)
+    sw = Search(pd_, pe_, pwork, stk)
+    tch = TurnChannels(TCH, TCW, TS)
+    tkw = TurnWork(pfx, pfy, pP, ptmp, taus, pspd, prev, pxn, pwn, pbn, paq)
     toggled = 0
     dense = False
     cap = EV.shape[0]
@@ -1990,15 +2028,10 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                     best = min(best, roots[e])
             if best == np.inf:
                 if track:
-                    _track_peaks(Bv, nt, h, t_call + t, 1.0, s, kc, cc, off, wptr, widx, wval,
-                                 tc_idx, FT, sptr, sidx, sval, sk, sc, chp, EP, PB, pbin, PC,
-                                 PM, PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk,
-                                 counts)
+                    _track_peaks(Bv, nt, (t_call + t, h, 1.0), con, chans, peaks, pw, sw, counts)
                 if track and n_turn:
-                    TP, ntp = _track_turns(Bv, nt, h, t_call + t, 1.0, s, kc, cc, off, wptr, widx,
-                                       wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH,
-                                       TCW, TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_,
-                                       pe_, pwork, stk, PB, pbin, pspd, prev, pxn, pwn, pbn, paq)
+                    TP, ntp = _track_turns(Bv, nt, (t_call + t, h, 1.0), con, chans, tch, TP, ntp,
+                                           tkw, sw, PB, pbin)
                     jumped[:] = False
                 t_old = t
                 t = t_end if h == remaining else t + h
@@ -2033,14 +2066,10 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                 continue
             t_ev = t + best * h
             if track:
-                _track_peaks(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx, wval,
-                             tc_idx, FT, sptr, sidx, sval, sk, sc, chp, EP, PB, pbin, PC, PM,
-                             PN, cs1, csd, pfx, pfy, pP, ptmp, pd_, pe_, pwork, stk, counts)
+                _track_peaks(Bv, nt, (t_call + t, h, best), con, chans, peaks, pw, sw, counts)
             if track and n_turn:
-                TP, ntp = _track_turns(Bv, nt, h, t_call + t, best, s, kc, cc, off, wptr, widx,
-                                   wval, tc_idx, FT, sptr, sidx, sval, sk, sc, chp, TCH, TCW,
-                                   TS, jumped, TP, ntp, pfx, pfy, pP, ptmp, taus, pd_, pe_,
-                                   pwork, stk, PB, pbin, pspd, prev, pxn, pwn, pbn, paq)
+                TP, ntp = _track_turns(Bv, nt, (t_call + t, h, best), con, chans, tch, TP, ntp,
+                                       tkw, sw, PB, pbin)
                 jumped[:] = False
             while jn <= k2 and jn <= j_in and (jn + k_org) * dt < t_ev - 1e-13 * dt:
                 _evaluate(Bv, ((jn + k_org) * dt - t) / h, h, qo, vo)
@@ -2086,8 +2115,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                     EV[n_ev, 7] = np.nan
                     if track:
                         if before:  # an episode ends: its peak on the row that ends it
-                            resolve_peak(e, e, False, PC, PM, PN, PB, EP, pd_, pe_, pwork, stk,
-                                         counts)
+                            resolve_peak(e, e, False, peaks, sw, counts)
                             EV[n_ev, 6] = EP[e, 0]
                             EV[n_ev, 7] = EP[e, 1]
                             EP[e, 0] = -np.inf
@@ -2495,7 +2523,8 @@ class TaylorIntegrator:
             Turning(sysm.omega, float(azimuth0), *self.turning),
             Bound(self.reach, *self.state_bound.args()),
             Loads(*self._loads(loads, azimuth0)),
-            Peaks(*track, float(t0) if k_org is None else 0.0), Channels(*rows), Turns(*turns),
+            Peaks(*track, float(t0) if k_org is None else 0.0),
+            Channels(Sparse(*rows[:3]), *rows[3:]), Turns(*turns),
             Chain(carry, MKC, acc, span))
         if k_org is not None:
             self._carry = ((k_org + n_steps, S[-1].copy(), (carry, MKC, acc)) if status == 0
