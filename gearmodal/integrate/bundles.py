@@ -103,3 +103,16 @@ TurnChannels = namedtuple("TurnChannels", "TCH TCW TS")
 #: ``P``, ``tmp``, the extrema ``taus``, the input's speed ``spd`` and revolutions ``rev``,
 #: and the load integrals' nodes, weights, bins and values ``XN``, ``WN``, ``BN``, ``AQ``.
 TurnWork = namedtuple("TurnWork", "fx fy P tmp taus spd rev XN WN BN AQ")
+
+
+# -- the "expm" propagator's kernels (:mod:`gearmodal.integrate.kernels`) ---------------------
+#: A contact state's propagators over the dyadic steps ``dt / 2^j``: ``PHI[j]``, the force
+#: maps ``G0[j]``, ``G1[j]``, the constant part ``FS[j]``, and whether level ``j`` is there
+#: (``have``).
+Levels = namedtuple("Levels", "PHI G0 G1 FS have")
+
+#: A contact state's first-order system ``x' = A x + Minv F + fcon``.
+StateODE = namedtuple("StateODE", "A Minv fcon")
+
+#: The gap rows ``W``, offsets ``off`` and each contact's sign ``sgn`` (+1 open, -1 closed).
+GapRows = namedtuple("GapRows", "W off sgn")

@@ -14,6 +14,7 @@ segments and loads for it, not a second loop.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -23,27 +24,24 @@ from .loads import force_at
 from .newmark import run_newmark
 from .peaks import PEAK_BIN, PeakTracker
 from .scipy_ref import run_scipy
+from .stretch import Stretch
 from .system import PiecewiseLinearSystem
 from .turns import DRAIN_ROWS
 
 
 class Method:
-    """An integration method: ``run(system, dt, n_steps, F, x0, s0, azimuth0=0.0,
-    loads=None, **options)`` returns ``(X, S, events, stats)`` (states and contact states at
-    the ``n_steps + 1`` output times, events as rows or tuples, counters); ``options`` are the
-    names it takes. ``loads``: ``(knot_t, knot_u, harmonic_u, harmonic_nu, basis)``, loads on
-    their own time structure added to the grid ``F`` (:func:`~gearmodal.integrate.loads.force_at`);
-    a method that takes them (``takes_loads``) follows them between output times, the others
-    get them folded into ``F`` at the output times (Newmark: its steps). ``peaks``: a
-    :class:`~gearmodal.integrate.peaks.PeakTracker` for the exact peaks (``t0``: the run's
-    time at the call's start), which a method without them marks sampled.
+    """An integration method: ``run(stretch, **options)`` integrates a
+    :class:`~gearmodal.integrate.stretch.Stretch` and returns ``(X, S, events, stats)``
+    (states and contact states at the ``n_steps + 1`` output times, events as rows or tuples,
+    counters); ``options`` are the names it takes. The stretch's ``loads`` (on their own time
+    structure): a method that takes them (``takes_loads``) follows them between output times,
+    the others get them folded into ``F`` at the output times (Newmark: its steps). Its
+    ``peaks``: a method without them (``takes_peaks``) marks them sampled.
 
-    ``k_org``: the call continues a run at its output step ``k_org`` (``t0 = k_org dt``):
-    ``azimuth0`` and the loads' times are then from the run's start, and so are the events'
-    times returned. A method that ``chains`` walks the pieces one call would (the exact
-    method); the others are given times from the call's start. ``t_span``: the call's start
-    and end times when they are not ``k dt`` (a stepper's re-basing grid, whose times do not
-    depend on ``dt``)."""
+    Its ``k_org``: the call continues a run at its output step ``k_org``: ``azimuth0`` and
+    the loads' times are then from the run's start, and so are the events' times returned. A
+    method that ``chains`` walks the pieces one call would (the exact method); the others are
+    given times from the call's start (and ``t_span``'s start for ``k_org dt``)."""
 
     name = ""
     options: tuple[str, ...] = ()
@@ -57,35 +55,26 @@ class Method:
         (:attr:`chains`)."""
         return self.chains
 
-    def run(self, system: PiecewiseLinearSystem, dt: float, n_steps: int, F: np.ndarray,
-            x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0, loads=None, peaks=None,
-            t0: float = 0.0, k_org: int | None = None, t_span: tuple | None = None,
-            **options):
-        if k_org is not None:
-            if self.chains_with(options):
-                options = {**options, "k_org": k_org, "t_span": t_span}
-            else:  # times from the call's start, the events' back from the run's
-                t_org = k_org * dt if t_span is None else t_span[0]
-                if loads is not None:
-                    loads = (np.asarray(loads[0], dtype=float) - t_org,) + tuple(loads[1:])
-                X, S, ev, st = self.run(system, dt, n_steps, F, x0, s0,
-                                        azimuth0 + system.omega * t_org, loads, peaks, t0,
-                                        **options)
-                ev = event_rows(ev)
-                ev[:, 0] += t_org
-                return X, S, ev, st
-        if self.takes_peaks:
-            options = {**options, "peaks": peaks, "t0": t0}
-        elif peaks is not None:
-            peaks.exact = False
-        if loads is None:
-            return type(self)._run(system, dt, n_steps, F, x0, s0, azimuth0=azimuth0,
-                                   **options)
-        if self.takes_loads:
-            return type(self)._run(system, dt, n_steps, F, x0, s0, azimuth0=azimuth0,
-                                   loads=loads, **options)
-        F = F + force_at(loads, np.arange(n_steps + 1) * dt)
-        return type(self)._run(system, dt, n_steps, F, x0, s0, azimuth0=azimuth0, **options)
+    def run(self, stretch: Stretch, **options):
+        """``(X, S, events, stats)`` of the stretch ``stretch`` (class docstring)."""
+        if stretch.k_org is not None and not self.chains_with(options):
+            # times from the call's start, the events' back from the run's
+            t_org = stretch.k_org * stretch.dt if stretch.t_span is None else stretch.t_span[0]
+            loads = stretch.loads
+            if loads is not None:
+                loads = (np.asarray(loads[0], dtype=float) - t_org,) + tuple(loads[1:])
+            azimuth0 = stretch.azimuth0 + stretch.system.omega * t_org
+            X, S, ev, stats = self.run(replace(stretch, azimuth0=azimuth0, loads=loads,
+                                               k_org=None, t_span=None), **options)
+            ev = event_rows(ev)
+            ev[:, 0] += t_org
+            return X, S, ev, stats
+        if stretch.peaks is not None and not self.takes_peaks:
+            stretch.peaks.exact = False
+        if stretch.loads is not None and not self.takes_loads:
+            t = np.arange(stretch.n_steps + 1) * stretch.dt
+            stretch = replace(stretch, F=stretch.F + force_at(stretch.loads, t), loads=None)
+        return type(self)._run(stretch, **options)
 
     def check(self, options: dict) -> None:
         """Refuse an option this method does not take, naming it and the ones it does, and a
@@ -242,12 +231,11 @@ class Driver:
         meshes). ``t_span``: the call's start and end times (chained; default ``k dt``)."""
         if self.peaks is None and self.peak_bin is not None:
             self.peaks = PeakTracker(system, self.peak_bin, turns=self.turning_points)
-        X, S, ev, st = self.method.run(system, self.dt, n_steps, F, self.x, self.s,
-                                       azimuth0=azimuth0, loads=loads, peaks=self.peaks,
-                                       t0=self.k * self.dt if t_span is None else t_span[0],
-                                       k_org=self.k if self.chained else None,
-                                       t_span=t_span if self.chained else None,
-                                       **self.options)
+        X, S, ev, st = self.method.run(
+            Stretch(system, self.dt, n_steps, F, self.x, self.s, azimuth0, loads, self.peaks,
+                    self.k * self.dt if t_span is None else t_span[0],
+                    self.k if self.chained else None, t_span if self.chained else None),
+            **self.options)
         ev = event_rows(ev)
         if not self.chained:
             ev[:, 0] += self.k * self.dt

@@ -26,8 +26,10 @@ import weakref
 import numpy as np
 
 from ..errors import ModelError, SolveError
+from .bundles import GapRows, Levels, StateODE
 from .kernels import GRAZE_MARGIN, SIMULTANEOUS, advance_state, fast_steps
 from .loads import force_at
+from .stretch import Stretch
 from .system import TAYLOR_TERMS, PiecewiseLinearSystem, Propagators
 from .taylor import TaylorIntegrator
 
@@ -107,10 +109,11 @@ class ExactIntegrator:
         while True:
             d, st = self.stacks(s)
             status, t_new, x_new, mask, level = advance_state(
-                st["PHI"], st["G0"], st["G1"], st["FS"], st["have"], d["A"], sysm.MinvU, d["f"],
-                sysm.W, sysm.offset, st["sgn"], x, t, t_end, tk, F0, F1, self.dt,
-                st["resolve"], st["J"], GRAZE_MARGIN, TAYLOR_TERMS, TAYLOR_SAMPLES,
-                SIMULTANEOUS * self.dt)
+                Levels(st["PHI"], st["G0"], st["G1"], st["FS"], st["have"]),
+                StateODE(d["A"], sysm.MinvU, d["f"]), GapRows(sysm.W, sysm.offset, st["sgn"]),
+                x, t, t_end, tk, F0, F1, self.dt,
+                (st["resolve"], st["J"], GRAZE_MARGIN, TAYLOR_TERMS, TAYLOR_SAMPLES,
+                 SIMULTANEOUS * self.dt))
             if status == 2:
                 self.fill(s, int(level))
                 continue
@@ -146,13 +149,11 @@ def _check_finite(X: np.ndarray, dt: float) -> None:
         raise SolveError("simulate", f"the solution is not finite at t = {bad * dt:.9g} s")
 
 
-def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
-              x0: np.ndarray, s0: np.ndarray, max_events_per_step: int = 200,
-              propagator: str = "taylor", azimuth0: float = 0.0, loads=None, peaks=None,
-              t0: float = 0.0, k_org: int | None = None, t_span: tuple | None = None):
-    """Integrate ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
+def run_exact(stretch: Stretch, max_events_per_step: int = 200, propagator: str = "taylor"):
+    """Integrate the stretch ``stretch`` (:class:`~gearmodal.integrate.stretch.Stretch`):
+    ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
 
-    ``F_grid`` (n_steps + 1, n) is the generalised force at the output times (linear in
+    ``F`` (n_steps + 1, n) is the generalised force at the output times (linear in
     between); with an input basis on the system it must lie in it (checked). Returns
     ``(X, S, events, stats)``: states (n_steps + 1, 2n), contact states
     (n_steps + 1, n_contacts), events as rows (time, contact, before, after, rate, force):
@@ -185,6 +186,9 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
     returned; the propagator walks the pieces one call would. ``t_span``: the call's start
     and end times, when not ``k dt`` (a stepper's re-basing grid).
     """
+    system, dt, n_steps = stretch.system, stretch.dt, stretch.n_steps
+    F_grid, x0, s0 = stretch.F, stretch.x0, stretch.s0
+    loads, peaks = stretch.loads, stretch.peaks
     system.asm.require_piecewise_linear("method='exact'")
     if propagator not in PROPAGATORS:
         raise ModelError("propagator", f"= {propagator!r}: must be one of "
@@ -212,8 +216,8 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
         loads = None
     F_grid = system.reduce(np.ascontiguousarray(F_grid, dtype=float))  # input basis, if any
     if propagator == "taylor":
-        X, S, events = integ.run(n_steps, F_grid, x0, s0, azimuth0, loads, peaks, t0, k_org,
-                                 t_span)
+        X, S, events = integ.run(n_steps, F_grid, x0, s0, stretch.azimuth0, loads, peaks,
+                                 stretch.t0, stretch.k_org, stretch.t_span)
         _check_finite(X, dt)
         return X, S, events, {"exponentials": 0, **integ.counts}
     prop = integ.prop
@@ -231,8 +235,8 @@ def run_exact(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np
             if not st["have"][0]:
                 integ.fill(s, 0)
             k_new = fast_steps(st["PHI"][0], st["G0"][0], st["G1"][0], st["FS"][0], F_grid, k,
-                               n_steps, x, system.W, system.offset, st["sgn"], GRAZE_MARGIN,
-                               dt, X)
+                               n_steps, x, GapRows(system.W, system.offset, st["sgn"]),
+                               GRAZE_MARGIN, dt, X)
             S[k + 1:k_new + 1] = s
             k = k_new
             if k == n_steps:

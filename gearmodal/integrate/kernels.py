@@ -86,10 +86,12 @@ def _signed(W, off, sgn, x, n):
 
 
 @numba.njit(cache=True)
-def fast_steps(Phi, G0, G1, fs, F, k0, k_end, x, W, off, sgn, margin, dt, X):
+def fast_steps(Phi, G0, G1, fs, F, k0, k_end, x, gaps, margin, dt, X):
     """Propagate from output step k0 with ``x`` while no contact is a candidate; rows
-    ``X[k0 + 1 .. k]`` are written. Returns k, the index of the first step not taken (k_end
+    ``X[k0 + 1 .. k]`` are written. ``gaps``: the gap rows, offsets and signs
+    (:data:`~.bundles.GapRows`). Returns k, the index of the first step not taken (k_end
     when all were taken)."""
+    W, off, sgn = gaps
     N = x.shape[0]
     n = N // 2
     nc = W.shape[0]
@@ -244,10 +246,12 @@ def _piece(PHI, G0, G1, FS, j, x, Fa, Fb):
 
 
 @numba.njit(cache=True)
-def _taylor_first(A, Minv, fcon, W, off, sgn, x, Fa, dF, L, cand, n_terms, n_samples,
-                  simultaneous):
-    """Earliest crossing among candidates on [0, L] on the Taylor series at x: returns
+def _taylor_first(ode, gaps, x, Fa, dF, L, cand, n_terms, n_samples, simultaneous):
+    """Earliest crossing among candidates on [0, L] on the Taylor series at x (the state's
+    ``ode``: :data:`~.bundles.StateODE`; ``gaps``: :data:`~.bundles.GapRows`): returns
     (tau or inf, mask of contacts switching together, Taylor rows)."""
+    A, Minv, fcon = ode
+    W, off, sgn = gaps
     n = x.shape[0] // 2
     Y = taylor_coefficients(A, Minv, x, Fa, dF, fcon, n_terms)
     nc = W.shape[0]
@@ -273,15 +277,21 @@ def _taylor_first(A, Minv, fcon, W, off, sgn, x, Fa, dF, L, cand, n_terms, n_sam
 
 
 @numba.njit(cache=True)
-def advance_state(PHI, G0, G1, FS, have, A, Minv, fcon, W, off, sgn, x, t, t_end, tk, F0,
-                  F1, dt, j_resolve, j_taylor, margin, n_terms, n_samples, simultaneous):
+def advance_state(levels, ode, gaps, x, t, t_end, tk, F0, F1, dt, tol):
     """Advance from t to t_end (inside the output step starting at tk, force linear from F0 to
-    F1) in one contact state; stop at the first state change.
+    F1) in one contact state; stop at the first state change. The bundles of
+    :mod:`gearmodal.integrate.bundles`: the state's dyadic propagators ``levels``
+    (:data:`~.bundles.Levels`), its first-order system ``ode`` (:data:`~.bundles.StateODE`),
+    the gap rows ``gaps`` (:data:`~.bundles.GapRows`), and ``tol``: ``(j_resolve, j_taylor,
+    margin, n_terms, n_samples, simultaneous)``.
 
     Returns (status, t, x, mask, level): status 0 = reached t_end; 1 = event at t (x is the
     exact state there, mask the switching contacts); 2 = the propagator of dyadic ``level`` is
     needed (nothing was advanced; compute it and call again).
     """
+    PHI, G0, G1, FS, have = levels
+    W, off, sgn = gaps
+    j_resolve, j_taylor, margin, n_terms, n_samples, simultaneous = tol
     N = x.shape[0]
     n = N // 2
     nc = W.shape[0]
@@ -301,8 +311,8 @@ def advance_state(PHI, G0, G1, FS, have, A, Minv, fcon, W, off, sgn, x, t, t_end
         if j > j_taylor:
             cand = np.ones(nc, dtype=numba.boolean)
             Fa = F0 + slope * (t - tk)
-            tau, mask, Y = _taylor_first(A, Minv, fcon, W, off, sgn, x, Fa, slope, L_total,
-                                         cand, n_terms, n_samples, simultaneous)
+            tau, mask, Y = _taylor_first(ode, gaps, x, Fa, slope, L_total, cand, n_terms,
+                                         n_samples, simultaneous)
             if tau < np.inf:
                 return 1, t + tau, taylor_eval(Y, tau), mask, 0
             return 0, t_end, taylor_eval(Y, L_total), empty, 0
@@ -338,8 +348,8 @@ def advance_state(PHI, G0, G1, FS, have, A, Minv, fcon, W, off, sgn, x, t, t_end
                 Lj = dt / 2.0**jj
                 if jj >= j_taylor:
                     Fa = F0 + slope * (ta - tk)
-                    tau, mask, Y = _taylor_first(A, Minv, fcon, W, off, sgn, xa, Fa, slope,
-                                                 Lj, cc, n_terms, n_samples, simultaneous)
+                    tau, mask, Y = _taylor_first(ode, gaps, xa, Fa, slope, Lj, cc, n_terms,
+                                                 n_samples, simultaneous)
                     if tau < np.inf:
                         return 1, ta + tau, taylor_eval(Y, tau), mask, 0
                     continue

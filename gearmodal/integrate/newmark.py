@@ -17,13 +17,18 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import ModelError, SolveError
-from .system import PiecewiseLinearSystem
+from .stretch import Stretch
 
 BETA, GAMMA = 0.25, 0.5
 
 
-def run_newmark(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
-                x0: np.ndarray, s0: np.ndarray, azimuth0: float = 0.0):
+def run_newmark(stretch: Stretch):
+    """Integrate the stretch ``stretch`` (:class:`~gearmodal.integrate.stretch.Stretch`) with
+    Newmark's average acceleration: its ``system`` from ``(x0, s0)`` over ``n_steps`` steps
+    of ``dt`` with the force grid ``F`` (its loads folded into ``F`` by the driver)."""
+    system, dt, n_steps = stretch.system, stretch.dt, stretch.n_steps
+    F_grid, x0, s0 = stretch.F, stretch.x0, stretch.s0
+    azimuth0 = stretch.azimuth0
     system.asm.require_piecewise_linear("method='newmark'")
     if system.alternating:
         raise ModelError("method", "= 'newmark' does not follow an alternating mesh stiffness "

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import ModelError, SolveError
 from .loads import force_at
+from .stretch import Stretch
 from .system import PiecewiseLinearSystem
 
 #: crossings within this fraction of ``dt`` of a located event (and at least within the event
@@ -34,21 +35,23 @@ from .system import PiecewiseLinearSystem
 TIE = 1e-9
 
 
-def run_scipy(system: PiecewiseLinearSystem, dt: float, n_steps: int, F_grid: np.ndarray,
-              x0: np.ndarray, s0: np.ndarray, scipy_method: str = "RK45", rtol: float = 1e-6,
-              atol: float = 1e-12, max_events: int = 10_000_000, azimuth0: float = 0.0,
-              loads=None, **options):
-    """Integrate ``system`` from ``(x0, s0)`` over ``n_steps`` output steps of ``dt`` with
+def run_scipy(stretch: Stretch, scipy_method: str = "RK45", rtol: float = 1e-6, atol: float = 1e-12,
+              max_events: int = 10_000_000, **options):
+    """Integrate the stretch ``stretch`` (:class:`~gearmodal.integrate.stretch.Stretch`: its
+    ``system`` from ``(x0, s0)`` over ``n_steps`` output steps of ``dt``, with its ``F``,
+    ``azimuth0`` and ``loads``) with
     ``solve_ivp`` (``scipy_method``, ``rtol``, ``atol``, ``options``), restarting at every
     contact event and scheduled stiffness change; returns the states at the output times, the
     contact states there, the event log and ``{"nfev"}``."""
     from scipy.integrate import solve_ivp  # here: scipy.integrate and what it loads cost a
     # process 30 MB that a run of another method need not pay
 
+    system, n_steps = stretch.system, stretch.n_steps
     if system.turning and system.asm.round is not None:
         raise ModelError("method", "= 'scipy' does not integrate a round clearance on turning "
                          "geometry")
-    run = _Run(system, dt, n_steps, F_grid, x0, s0, azimuth0, loads)
+    run = _Run(system, stretch.dt, n_steps, stretch.F, stretch.x0, stretch.s0, stretch.azimuth0,
+               stretch.loads)
 
     def solve(rhs, span, x, t_eval, dense, events):
         try:
