@@ -2472,7 +2472,7 @@ class TaylorIntegrator:
         if t_span is not None and k_org is not None:
             span = np.array([float(t_span[0]), float(t_span[1])])
             t_org = span[0]
-        TL, FL, MinvUL, GTL, HX, HNU = self._loads(loads, azimuth0)
+        lds = Loads(*self._loads(loads, azimuth0))
         if chained:
             kc = self._kc  # as the last call left it (its stiffness changes applied)
         else:
@@ -2522,7 +2522,7 @@ class TaylorIntegrator:
             Out(X, S, EV, n_ev, counts), Schedule(*sched, sched_pos),
             Turning(sysm.omega, float(azimuth0), *self.turning),
             Bound(self.reach, *self.state_bound.args()),
-            Loads(*self._loads(loads, azimuth0)),
+            lds,
             Peaks(*track, float(t0) if k_org is None else 0.0),
             Channels(Sparse(*rows[:3]), *rows[3:]), Turns(*turns),
             Chain(carry, MKC, acc, span))
