@@ -1,10 +1,16 @@
-"""The exact kernel's arguments and scratch in named bundles (:func:`.taylor.taylor_run`).
+"""The exact kernels' arguments and scratch in named bundles (:func:`.taylor.taylor_run`, the
+tracking kernels, and the ``"expm"`` propagator's :mod:`.kernels`).
 
-Named tuples, which numba passes and unpacks as it does plain arguments: the kernel reads
-``sy.W`` where it read ``W``, with the same machine work. Arrays in a bundle are shared, not
-copied: what the kernel changes in place (the contact state ``Call.s``, the stiffness
-``System.kc``, the outputs) the caller sees. The Python side builds the argument bundles
-(:meth:`.taylor.TaylorIntegrator.run`).
+Named tuples: the field order is the contract, and code reads ``geo.harm`` or unpacks a
+bundle where it read ``harm``, with the same machine work. Arrays in a bundle are shared, not
+copied: what a kernel changes in place (the contact state ``Call.s``, the stiffness
+``System.kc``, the outputs) the caller sees. From Python they cross into numba as plain
+tuples (``tuple(bundle)``, in this order; built once per call in
+:meth:`.taylor.TaylorIntegrator.run`, once per contact state in
+:meth:`.exact.ExactIntegrator.stacks`): numba's dispatch costs about 0.4 us more per named
+tuple than per plain one (measured on ``advance_state``, which the ``"expm"`` propagator
+calls every step: 6 % of a gear rattle's run). Inside, :func:`.taylor.taylor_run` builds the
+named ones it hands on, once per call.
 """
 
 from __future__ import annotations

@@ -1602,6 +1602,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
     reach, per_state, Ksym, Wl, km, cb, kappa, rho_keys, rho_vals = bound
     TL, FL, MinvUL, GTL, HX, HNU = loads
     track, EP, PB, pbin, PC, PM, PN, t_call = peaks
+    (sptr, sidx, sval), ch_k, ch_c, ch_p = chans
     TCH, TCW, TS, TP, ntp = turns
     carry, MKC_in, acc_in, t_span = chain
     N = x.shape[0]
@@ -1743,6 +1744,8 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
     pw = PeakWork(cs1, csd, pfx, pfy, pP, ptmp)
     sw = Search(pd_, pe_, pwork, stk)
     tch = TurnChannels(TCH, TCW, TS)
+    pk = Peaks(track, EP, PB, pbin, PC, PM, PN, t_call)
+    chn = Channels(Sparse(sptr, sidx, sval), ch_k, ch_c, ch_p)
     tkw = TurnWork(pfx, pfy, pP, ptmp, taus, pspd, prev, pxn, pwn, pbn, paq)
     toggled = 0
     dense = False
@@ -2028,9 +2031,9 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                     best = min(best, roots[e])
             if best == np.inf:
                 if track:
-                    _track_peaks(Bv, nt, (t_call + t, h, 1.0), con, chans, peaks, pw, sw, counts)
+                    _track_peaks(Bv, nt, (t_call + t, h, 1.0), con, chn, pk, pw, sw, counts)
                 if track and n_turn:
-                    TP, ntp = _track_turns(Bv, nt, (t_call + t, h, 1.0), con, chans, tch, TP, ntp,
+                    TP, ntp = _track_turns(Bv, nt, (t_call + t, h, 1.0), con, chn, tch, TP, ntp,
                                            tkw, sw, PB, pbin)
                     jumped[:] = False
                 t_old = t
@@ -2066,9 +2069,9 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                 continue
             t_ev = t + best * h
             if track:
-                _track_peaks(Bv, nt, (t_call + t, h, best), con, chans, peaks, pw, sw, counts)
+                _track_peaks(Bv, nt, (t_call + t, h, best), con, chn, pk, pw, sw, counts)
             if track and n_turn:
-                TP, ntp = _track_turns(Bv, nt, (t_call + t, h, best), con, chans, tch, TP, ntp,
+                TP, ntp = _track_turns(Bv, nt, (t_call + t, h, best), con, chn, tch, TP, ntp,
                                        tkw, sw, PB, pbin)
                 jumped[:] = False
             while jn <= k2 and jn <= j_in and (jn + k_org) * dt < t_ev - 1e-13 * dt:
@@ -2115,7 +2118,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                     EV[n_ev, 7] = np.nan
                     if track:
                         if before:  # an episode ends: its peak on the row that ends it
-                            resolve_peak(e, e, False, peaks, sw, counts)
+                            resolve_peak(e, e, False, pk, sw, counts)
                             EV[n_ev, 6] = EP[e, 0]
                             EV[n_ev, 7] = EP[e, 1]
                             EP[e, 0] = -np.inf
@@ -2514,18 +2517,18 @@ class TaylorIntegrator:
             carry, MKC, acc = last[2]
         else:
             carry, MKC, acc = np.zeros(7), np.zeros((0, 0)), np.zeros(0)
-        status, k, n_ev, contact, EV, TP, ntp, MKC, acc = taylor_run(
+        # (plain tuples across the boundary: numba types a named tuple's class at every
+        # call, bundles.py)
+        status, k, n_ev, contact, EV, TP, ntp, MKC, acc = taylor_run(*map(tuple, (
             System(self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
                    sysm.c, sysm.offset, self.MinvU),
             Call(F, x, s, k, n_steps, 0 if k_org is None else int(k_org), self.dt, self.h_max,
                  self.terms, self.tscale, tie, self.max_events),
             Out(X, S, EV, n_ev, counts), Schedule(*sched, sched_pos),
             Turning(sysm.omega, float(azimuth0), *self.turning),
-            Bound(self.reach, *self.state_bound.args()),
-            lds,
+            Bound(self.reach, *self.state_bound.args()), lds,
             Peaks(*track, float(t0) if k_org is None else 0.0),
-            Channels(Sparse(*rows[:3]), *rows[3:]), Turns(*turns),
-            Chain(carry, MKC, acc, span))
+            Channels(rows[:3], *rows[3:]), Turns(*turns), Chain(carry, MKC, acc, span))))
         if k_org is not None:
             self._carry = ((k_org + n_steps, S[-1].copy(), (carry, MKC, acc)) if status == 0
                            else None)
