@@ -1,10 +1,11 @@
 """The exact kernels' arguments and scratch in named bundles (:func:`.taylor.taylor_run`, the
 tracking kernels, and the ``"expm"`` propagator's :mod:`.kernels`).
 
-Named tuples: the field order is the contract, and code reads ``geo.harm`` or unpacks a
-bundle where it read ``harm``, with the same machine work. Arrays in a bundle are shared, not
-copied: what a kernel changes in place (the contact state ``Call.s``, the stiffness
-``System.kc``, the outputs) the caller sees. From Python they cross into numba as plain
+Named tuples: the field order is the contract. A kernel that receives a bundle from Python
+unpacks it by position (it arrives as a plain tuple, below); the named ones a kernel builds
+and hands on are read by field (``pk.PB``), with the same machine work. Arrays in a bundle
+are shared, not copied: what a kernel changes in place (the contact state ``Call.s``, the
+stiffness ``System.kc``, the outputs) the caller sees. From Python they cross into numba as plain
 tuples (``tuple(bundle)``, in this order; built once per call in
 :meth:`.taylor.TaylorIntegrator.run`, once per contact state in
 :meth:`.exact.ExactIntegrator.stacks`): numba's dispatch costs about 0.4 us more per named
@@ -34,7 +35,7 @@ Call = namedtuple("Call", "F x s k0 n_steps k_org dt h_max terms tscale tie max_
 #: ``n_ev`` on (grown by the kernel, which returns the larger array) and the work ``counts``.
 Out = namedtuple("Out", "X S EV n_ev counts")
 
-#: Scheduled stiffness changes (alternating mesh stiffness): times ``t`` from step 0,
+#: Scheduled stiffness changes (alternating mesh stiffness): times ``t`` from step 0 (sorted),
 #: contacts ``e``, new stiffnesses ``k``, and ``pos`` (1,), the next entry (advanced in place).
 Schedule = namedtuple("Schedule", "t e k pos")
 
@@ -48,8 +49,10 @@ Turning = namedtuple("Turning", "om psi0 harm tcols krows urows ZK ZC tc_idx TW 
 #: ``reach``, whether they are on (``per_state``), their arrays and the table of states met.
 Bound = namedtuple("Bound", "reach per_state Ksym Wl km cb kappa keys vals")
 
-#: Loads on their own time structure: knot times ``TL`` and values ``FL`` acting through
-#: ``MinvUL`` (and ``GTL`` turning), harmonic loads ``HX`` (nh, n) complex at ``HNU`` rad/s.
+#: Loads on their own time structure: knot times ``TL`` from step 0 (none, or the first at or
+#: before 0 and the last at or after the call's end: numba does not check) and values ``FL``
+#: acting through ``MinvUL`` (and ``GTL`` turning), harmonic loads ``HX`` (nh, n) complex at
+#: ``HNU`` rad/s.
 Loads = namedtuple("Loads", "TL FL MinvUL GTL HX HNU")
 
 #: Exact peaks (:class:`~gearmodal.integrate.peaks.PeakTracker`): on or off (``track``), the
@@ -92,8 +95,9 @@ TurningWork = namedtuple(
 #: ``rows`` (:data:`Sparse`), the turning contacts ``tc_idx`` and their force series ``FT``.
 ContactRows = namedtuple("ContactRows", "s jumped kc cc off rows tc_idx FT")
 
-#: A polynomial search's scratch (:func:`~.taylor.poly_max`, :func:`~.taylor.poly_turns`):
-#: ``d``, ``e`` of the series' width, ``wflat`` the subdivision's rows, ``stk`` its stack.
+#: A polynomial search's scratch (:func:`~.taylor.poly_max`, :func:`~.taylor.poly_turns`; ``e``
+#: also the first bounds' of :func:`~.taylor._low_bound` and :func:`~.taylor._upper`): ``d``,
+#: ``e`` of the series' width, ``wflat`` the subdivision's rows, ``stk`` its stack.
 Search = namedtuple("Search", "d e wflat stk")
 
 #: The peak search's scratch (:func:`~.taylor._track_peaks`): the coordinates' tail sums

@@ -56,7 +56,7 @@ class Method:
         return self.chains
 
     def run(self, stretch: Stretch, **options):
-        """``(X, S, events, stats)`` of the stretch ``stretch`` (class docstring)."""
+        """``(X, S, events, stats)`` of ``stretch`` (the class docstring)."""
         if stretch.k_org is not None and not self.chains_with(options):
             # times from the call's start, the events' back from the run's
             t_org = stretch.k_org * stretch.dt if stretch.t_span is None else stretch.t_span[0]
@@ -232,9 +232,10 @@ class Driver:
         if self.peaks is None and self.peak_bin is not None:
             self.peaks = PeakTracker(system, self.peak_bin, turns=self.turning_points)
         X, S, ev, st = self.method.run(
-            Stretch(system, self.dt, n_steps, F, self.x, self.s, azimuth0, loads, self.peaks,
-                    self.k * self.dt if t_span is None else t_span[0],
-                    self.k if self.chained else None, t_span if self.chained else None),
+            Stretch(system, self.dt, n_steps, F, self.x, self.s, azimuth0=azimuth0, loads=loads,
+                    peaks=self.peaks, t0=self.k * self.dt if t_span is None else t_span[0],
+                    k_org=self.k if self.chained else None,
+                    t_span=t_span if self.chained else None),
             **self.options)
         ev = event_rows(ev)
         if not self.chained:

@@ -90,8 +90,8 @@ class ExactIntegrator:
                   "PHI": np.zeros((J + 1, N, N)), "G0": np.zeros((J + 1, N, m)),
                   "G1": np.zeros((J + 1, N, m)), "FS": np.zeros((J + 1, N)),
                   "have": np.zeros(J + 1, dtype=bool), "sgn": np.where(s, -1.0, 1.0)}
-            # the kernels' bundles (bundles.py), once per state (the arrays fill in place),
-            # handed to numba as plain tuples (bundles.py: a named one costs a call 0.4 us)
+            # the kernels' bundles, once per state (the arrays fill in place), as plain
+            # tuples (bundles.py)
             st["levels"] = tuple(Levels(st["PHI"], st["G0"], st["G1"], st["FS"], st["have"]))
             st["ode"] = tuple(StateODE(d["A"], self.sys.MinvU, d["f"]))
             st["gaps"] = tuple(GapRows(self.sys.W, self.sys.offset, st["sgn"]))
@@ -114,7 +114,7 @@ class ExactIntegrator:
         count = 0
         sysm = self.sys
         while True:
-            d, st = self.stacks(s)
+            _, st = self.stacks(s)
             status, t_new, x_new, mask, level = advance_state(
                 st["levels"], st["ode"], st["gaps"], x, t, t_end, tk, F0, F1, self.dt,
                 st["tol"])
@@ -154,7 +154,7 @@ def _check_finite(X: np.ndarray, dt: float) -> None:
 
 
 def run_exact(stretch: Stretch, max_events_per_step: int = 200, propagator: str = "taylor"):
-    """Integrate the stretch ``stretch`` (:class:`~gearmodal.integrate.stretch.Stretch`):
+    """Integrate ``stretch`` (:class:`~gearmodal.integrate.stretch.Stretch`):
     ``n_steps`` steps of ``dt`` from ``x0`` in contact state ``s0``.
 
     ``F`` (n_steps + 1, n) is the generalised force at the output times (linear in

@@ -23,7 +23,7 @@ BETA, GAMMA = 0.25, 0.5
 
 
 def run_newmark(stretch: Stretch):
-    """Integrate the stretch ``stretch`` (:class:`~gearmodal.integrate.stretch.Stretch`) with
+    """Integrate ``stretch`` (:class:`~gearmodal.integrate.stretch.Stretch`) with
     Newmark's average acceleration: its ``system`` from ``(x0, s0)`` over ``n_steps`` steps
     of ``dt`` with the force grid ``F`` (its loads folded into ``F`` by the driver)."""
     system, dt, n_steps = stretch.system, stretch.dt, stretch.n_steps

@@ -136,7 +136,8 @@ class PeakTracker:
             self.PB = grown
 
     def args(self) -> tuple:
-        """The kernel's peak arguments after the loads (:func:`~.taylor.taylor_run`)."""
+        """The kernel's peak fields (:data:`~.bundles.Peaks` but its call's start
+        ``t_call``)."""
         return (True, self.EP, self.PB, self.bin, self.PC, self.PM, self.PN)
 
     def flush(self) -> None:

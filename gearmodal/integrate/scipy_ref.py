@@ -37,12 +37,11 @@ TIE = 1e-9
 
 def run_scipy(stretch: Stretch, scipy_method: str = "RK45", rtol: float = 1e-6, atol: float = 1e-12,
               max_events: int = 10_000_000, **options):
-    """Integrate the stretch ``stretch`` (:class:`~gearmodal.integrate.stretch.Stretch`: its
-    ``system`` from ``(x0, s0)`` over ``n_steps`` output steps of ``dt``, with its ``F``,
-    ``azimuth0`` and ``loads``) with
-    ``solve_ivp`` (``scipy_method``, ``rtol``, ``atol``, ``options``), restarting at every
-    contact event and scheduled stiffness change; returns the states at the output times, the
-    contact states there, the event log and ``{"nfev"}``."""
+    """Integrate ``stretch`` (:class:`~gearmodal.integrate.stretch.Stretch`: its ``system``
+    from ``(x0, s0)`` over ``n_steps`` output steps of ``dt``, with its ``F``, ``azimuth0``
+    and ``loads``) with ``solve_ivp`` (``scipy_method``, ``rtol``, ``atol``, ``options``),
+    restarting at every contact event and scheduled stiffness change; returns the states at
+    the output times, the contact states there, the event log and ``{"nfev"}``."""
     from scipy.integrate import solve_ivp  # here: scipy.integrate and what it loads cost a
     # process 30 MB that a run of another method need not pay
 

@@ -19,12 +19,12 @@ if TYPE_CHECKING:
     from .system import PiecewiseLinearSystem
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Stretch:
     """``n_steps`` output steps of ``dt`` (s) of ``system`` from the state ``x0`` in the
     contact state ``s0``.
 
-    ``F`` (n_steps + 1, m) is the generalised force at the output times (linear in between);
+    ``F`` (n_steps + 1 rows) is the generalised force at the output times (linear in between);
     ``azimuth0`` the input azimuth at the start (rad); ``loads``: ``(knot_t, knot_u,
     harmonic_u, harmonic_nu, basis)``, loads on their own time structure added to ``F``
     (:func:`~gearmodal.integrate.loads.force_at`); ``peaks``: a

@@ -1374,7 +1374,7 @@ def _load_integrals(P, m, XN, WN, BN, cnt, PB, col, AQ):
 
 
 @numba.njit(cache=True)
-def _track_turns(Bv, nt, span, con, chans, tch, TP, ntp, tw, sw, PB, pbin):
+def _track_turns(Bv, nt, span, con, chans, tch, TP, ntp, tkw, sw, PB, pbin):
     """The turning points over the piece ``Bv`` (from absolute time ``t_abs``, length ``h``, up
     to ``te`` of it) of every turning channel: the contact channels ``TCH`` (up to two
     contacts each, weights ``TCW``: a force column of one contact or a dead band's two sides;
@@ -1389,15 +1389,14 @@ def _track_turns(Bv, nt, span, con, chans, tch, TP, ntp, tw, sw, PB, pbin):
     what the level changes carry). Returns ``TP`` (grown first to hold every row the piece
     may add) and its rows used. The piece is ``span = (t_abs, h, te)``; the rest comes in the
     bundles of :mod:`gearmodal.integrate.bundles`: ``con`` (ContactRows), ``chans``
-    (Channels), ``tch`` (TurnChannels), ``tw`` (TurnWork), ``sw`` (Search)."""
+    (Channels), ``tch`` (TurnChannels), ``tkw`` (TurnWork), ``sw`` (Search)."""
     t_abs, h, te = span
     s, jumped, kc, cc, off, tc_idx, FT = con.s, con.jumped, con.kc, con.cc, con.off, \
         con.tc_idx, con.FT
     wptr, widx, wval = con.rows
-    srows, sk, sc, chp = chans
-    sptr, sidx, sval = srows
+    (sptr, sidx, sval), _, _, chp = chans
     TCH, TCW, TS = tch
-    fx, fy, P, tmp, taus, spd, rev, XN, WN, BN, AQ = tw
+    fx, fy, P, tmp, taus, spd, rev, XN, WN, BN, AQ = tkw
     d, ee, wflat, stk = sw
     nct = TCH.shape[0]
     t1 = t_abs + te * h
@@ -1699,7 +1698,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
     kt = np.empty(nTC)
     ct = np.empty(nTC)
     closed = np.empty(nTC, dtype=np.bool_)
-    loads = False  # a turning load over the current output step
+    grid_loads = False  # a turning load of the force grid over the current output step
     VA = np.zeros((H1, n), dtype=np.complex128)
     VS = np.zeros((H1, n), dtype=np.complex128)
     GV = np.zeros((H1, n), dtype=np.complex128)
@@ -1793,7 +1792,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
             gF[i] = a0
             gS[i] = a1 / span
         if turning:  # the turning load harmonics at the stretch start and their rates
-            loads = False
+            grid_loads = False
             for hh in range(1, H1):
                 for i in range(n):
                     z0 = 0j
@@ -1804,7 +1803,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                     VA[hh, i] = z0
                     VS[hh, i] = z1 / span
                     if z0 != 0.0 or z1 != 0.0:
-                        loads = True
+                        grid_loads = True
         t = tk
         count = 0
         fresh = False  # ga, ra hold the gaps at (t, q, v) in state s
@@ -1923,7 +1922,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                     _harmonic_rows(HX, HNU, t, h, nt, HF)
                 if turning:
                     # (a name, not an expression, in the call: numba's bytecode limit)
-                    turning_loads = loads or loads_knots
+                    turning_loads = grid_loads or loads_knots
                     _coefficients(MKC, g0, gR, q, v, h, Bv, tw, cturn, turning_loads, harmonic)
                 else:
                     _coefficients_frozen(MKC, g0, gR, q, v, h, Bv, ysc, HF, harmonic)
@@ -2517,8 +2516,7 @@ class TaylorIntegrator:
             carry, MKC, acc = last[2]
         else:
             carry, MKC, acc = np.zeros(7), np.zeros((0, 0)), np.zeros(0)
-        # (plain tuples across the boundary: numba types a named tuple's class at every
-        # call, bundles.py)
+        # (the bundles cross into numba as plain tuples: bundles.py)
         status, k, n_ev, contact, EV, TP, ntp, MKC, acc = taylor_run(*map(tuple, (
             System(self.MK0, self.MC0, self.U, sysm.W, self.wptr, self.widx, self.wval, kc,
                    sysm.c, sysm.offset, self.MinvU),
