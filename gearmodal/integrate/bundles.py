@@ -49,15 +49,18 @@ Turning = namedtuple("Turning", "om psi0 harm tcols krows urows ZK ZC tc_idx TW 
 #: ``reach``, whether they are on (``per_state``), their arrays and the table of states met.
 Bound = namedtuple("Bound", "reach per_state Ksym Wl km cb kappa keys vals")
 
-#: Loads on their own time structure: knot times ``TL`` from step 0 (none, or the first at or
-#: before 0 and the last at or after the call's end: numba does not check) and values ``FL``
-#: acting through ``MinvUL`` (and ``GTL`` turning), harmonic loads ``HX`` (nh, n) complex at
-#: ``HNU`` rad/s.
+#: Loads on their own time structure: knot times ``TL`` (nk,) from step 0 (none, or the first
+#: at or before 0 and the last at or after the call's end: numba does not check) and values
+#: ``FL`` (nk, mL) there, linear in between (a load series on its knots, a callable on its load
+#: step), acting through ``MinvUL`` (n, mL) and, turning, ``GTL`` (H1, n, mL); harmonic loads
+#: ``M^-1 F = Re sum_j HX_j exp(i HNU_j t)``: ``HX`` (nh, n) complex, ``HNU`` (nh,) rad/s.
 Loads = namedtuple("Loads", "TL FL MinvUL GTL HX HNU")
 
 #: Exact peaks (:class:`~gearmodal.integrate.peaks.PeakTracker`): on or off (``track``), the
-#: open episodes ``EP``, the peak bins ``PB`` of ``pbin`` s, the pending pieces ``PC``,
-#: ``PM``, ``PN``, and ``t_call``: this call's start (absolute times).
+#: open episodes ``EP`` (contacts, 2: peak, time), the peak bins ``PB`` (n_bins, contacts +
+#: channels, 5: value, time, and with the turning points a spring channel's load integrals) of
+#: ``pbin`` s, the pending pieces ``PC``, ``PM``, ``PN``, and ``t_call``: this call's start
+#: (absolute times).
 Peaks = namedtuple("Peaks", "track EP PB pbin PC PM PN t_call")
 
 #: Sparse rows (CSR): row ``j``'s columns ``idx[ptr[j]:ptr[j + 1]]`` and values ``val``.
@@ -70,7 +73,9 @@ Channels = namedtuple("Channels", "rows sk sc chp")
 
 #: Exact turning points (:class:`~gearmodal.integrate.turns.TurnPoints`): the contact
 #: channels ``TCH`` and their weights ``TCW``, each channel's state ``TS``, and the rows
-#: ``TP`` from row ``ntp`` (grown by the kernel, which returns the larger array).
+#: ``TP`` from row ``ntp`` (grown by the kernel, which returns the larger array): a turning
+#: point ``(time, channel, value)``, a change of a channel's level bin ``(time,
+#: -(channel + 1), bin, input revolutions)``.
 Turns = namedtuple("Turns", "TCH TCW TS TP ntp")
 
 #: A run advanced over several calls: ``carry`` (7,) (written at the end; empty for a call
