@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import ModelError
+from .levelsweep import LevelSweep, Unsorted
 
 #: default Woehler exponents (F1)
 WOEHLER = {"tooth_root": 8.7, "tooth_flank": 13.2, "bearing": 10.0 / 3.0}
@@ -420,45 +421,14 @@ def level_spectrum(result, channels: list[str], *, t_from: float = 0.0,
         raise ModelError("channels", "one kind of channel: mesh flanks or planet bearings' "
                          "radial forces (their levels differ)")
     edges = LEVELS[kinds.pop()]
-    want = set(channels)
-    times: dict[str, list] = {c: [] for c in channels}
-    bins: dict[str, list] = {c: [] for c in channels}
-    marks = [[np.zeros(1)], [np.zeros(1)]]  # the input's revolutions: 0 at the start
-    for chunk in itertools.chain([first], chunks):
-        mine = chunk["channel"].isin(want) | (chunk["channel"] == "input")
-        chunk = chunk[mine]
-        marks[0].append(np.asarray(chunk.index, dtype=float))
-        marks[1].append(chunk["input_revolutions"].to_numpy(dtype=float))
-        chunk = chunk[(chunk["bin"] >= 0) & (chunk.index < t1)]
-        for ch, part in chunk.groupby("channel", sort=False, observed=True):
-            b = part["bin"].to_numpy(dtype=np.int64)
-            if not np.array_equal(edges[b], part["level_low_N"].to_numpy()):
-                raise ModelError("level_changes", f"{ch!r}: its levels are not those of "
-                                 "fatigue.LEVELS (a run of another gearmodal?)")
-            times[ch].append(np.asarray(part.index, dtype=float))
-            bins[ch].append(b)
-    missing = [c for c in channels if not times[c]]
-    if missing:
-        raise ModelError("channels", f"= {missing[0]!r}: no level changes of that channel "
-                         "(a mesh flank or a planet bearing's radial force)")
-    T = {c: np.concatenate(times[c]) for c in channels}
-    B = {c: np.concatenate(bins[c]) for c in channels}
-    # every instant a channel changes bin, inside the span
-    u = np.unique(np.concatenate([[t_from, t1], *(x[(x > t_from) & (x < t1)]
-                                                   for x in T.values())]))
-    top = np.full(len(u) - 1, -1, dtype=np.int64)
-    for c in channels:
-        k = np.searchsorted(T[c], u[:-1], side="right") - 1  # the last change at or before
-        if np.any(k < 0):
-            raise ModelError("t_from", f"= {t_from!r}: before the run's start")
-        top = np.maximum(top, B[c][k])
-    nb = len(edges) - 1
-    tm, rv = np.concatenate(marks[0]), np.concatenate(marks[1])
-    order = np.argsort(tm, kind="stable")
-    R = np.interp(u, tm[order], rv[order])  # every u is a row's time or a mark's
-    return pd.DataFrame({"level_low": edges[:-1], "level_high": edges[1:],
-                         "time_s": np.bincount(top, weights=np.diff(u), minlength=nb),
-                         "revolutions": np.bincount(top, weights=np.diff(R), minlength=nb)})
+    sweep = LevelSweep(channels, edges, t_from, t1)
+    try:
+        for chunk in itertools.chain([first], chunks):
+            sweep.feed(chunk)
+    except Unsorted:  # a table written before its rows were sorted: swept whole
+        sweep = LevelSweep(channels, edges, t_from, t1)
+        sweep.feed(pd.concat(list(result.level_chunks())).sort_index(kind="stable"))
+    return sweep.table()
 
 
 def equivalent_loads(result, p: float, *, t_from: float = 0.0) -> pd.DataFrame | None:

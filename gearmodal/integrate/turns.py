@@ -194,9 +194,12 @@ def level_table(channels: list[str], levels: dict, rows: np.ndarray) -> pd.DataF
     ``channel``, ``bin`` (the level bin the channel's force is in from that time on:
     ``level_low_N <= F < level_high_N``, the first bin also below it and the last above),
     ``input_revolutions`` (the model input's revolutions from the run's start to that time,
-    NaN without an input), each channel's rows in time order, its first the run's start. Rows
-    of channel :data:`MARK` (bin -1) give the input's revolutions at each peak bin's start and
-    at the run's end."""
+    NaN without an input), in time order (rows of one instant in the order found), each
+    channel's first the run's start. Rows of channel :data:`MARK` (bin -1) give the input's
+    revolutions at each peak bin's start and at the run's end. ``rows`` are whole calls of the
+    kernel (a driver drains between calls), so tables made of successive batches are in time
+    order too: :func:`gearmodal.fatigue.level_spectrum` reads them a chunk at a time."""
+    rows = rows[np.argsort(rows[:, 0], kind="stable")]  # a piece's channels come one by one
     idx = rows[:, 1].astype(np.int64)
     b = rows[:, 2].astype(np.int64)
     names = np.array([*channels, MARK], dtype=object)[idx]
