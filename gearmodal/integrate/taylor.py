@@ -37,7 +37,10 @@ phases that receive the bundles made the event-dense gear rattle 5.8 times slowe
 operations per piece against 37, counted with a debugger on ``NRT_incref``/``NRT_decref``:
 about 5 ns each); a phase taking only the arrays it uses still costs about 10 ns per array,
 1 % of a rattle piece (under a microsecond) each. So the phases a piece goes through are
-commented blocks of one body, and the helpers it calls receive just what they read.
+commented blocks of one body, and the helpers it calls receive just what they read. And the
+body reads its arrays as borrowed views (:mod:`gearmodal.integrate.borrow`: no meminfo, so the
+reference operations that remain skip their atomic instruction), its own arrays kept alive to
+both returns by ``owners``.
 """
 
 from __future__ import annotations
@@ -51,6 +54,7 @@ import numba
 import numpy as np
 
 from ..errors import SolveError
+from .borrow import alive, borrowed
 from .bundles import (
     Bound,
     Call,
@@ -1593,17 +1597,23 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
     """
     # the bundles' fields under the names the body reads (once per call; the per-piece loop
     # is one body: the module's notes on the kernel's layout)
-    MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU = sy
-    F, x, s, k0, n_steps, k_org, dt, h_max, terms, tscale, simultaneous, max_events = call
+    # (the arrays the caller keeps through the call, borrowed: without reference counts,
+    # borrow.py; not those returned, EV, TP, MKC_in, acc_in)
+    MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU = borrowed(sy)
+    F, x, s, k0, n_steps, k_org, dt, h_max, terms, tscale, simultaneous, max_events = \
+        borrowed(call)
     X, S, EV, n_ev, counts = out
-    sched_t, sched_e, sched_k, sched_pos = sched
-    om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT = geo
-    reach, per_state, Ksym, Wl, km, cb, kappa, rho_keys, rho_vals = bound
-    TL, FL, MinvUL, GTL, HX, HNU = loads
-    track, EP, PB, pbin, PC, PM, PN, t_call = peaks
-    (sptr, sidx, sval), ch_k, ch_c, ch_p = chans
+    X, S, counts = borrowed((X, S, counts))
+    sched_t, sched_e, sched_k, sched_pos = borrowed(sched)
+    om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT = borrowed(geo)
+    reach, per_state, Ksym, Wl, km, cb, kappa, rho_keys, rho_vals = borrowed(bound)
+    TL, FL, MinvUL, GTL, HX, HNU = borrowed(loads)
+    track, EP, PB, pbin, PC, PM, PN, t_call = borrowed(peaks)
+    (sptr, sidx, sval), ch_k, ch_c, ch_p = borrowed(chans)
     TCH, TCW, TS, TP, ntp = turns
+    TCH, TCW, TS = borrowed((TCH, TCW, TS))
     carry, MKC_in, acc_in, t_span = chain
+    carry, t_span = borrowed((carry, t_span))
     N = x.shape[0]
     n = N // 2
     nc = W.shape[0]
@@ -1746,6 +1756,18 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
     pk = Peaks(track, EP, PB, pbin, PC, PM, PN, t_call)
     chn = Channels(Sparse(sptr, sidx, sval), ch_k, ch_c, ch_p)
     tkw = TurnWork(pfx, pfy, pP, ptmp, taus, pspd, prev, pxn, pwn, pbn, paq)
+    # from here on the per-piece work reads its arrays without reference counts (borrow.py):
+    # the names rebound to borrowed views, the arrays kept by ``owners`` (named at both
+    # returns: alive); MKC and acc are returned, so the loop reads their views MKCb, accb
+    owners = (B, tw, con, pw, sw, tch, pk, chn, tkw,
+              (q, v, qb, vb, ga, ra, gb, rb, coef, work_flat, stk, ysc, roots, colsum, qo, vo),
+              (order, order_est, gF, gS, g0, gR, HF, jumped, E, EL, P, OFS, VA, VS, GV),
+              (gLa, gLs, VLa, VLs, VST))
+    (B, tw, con, pw, sw, tch, pk, chn, tkw,
+     (q, v, qb, vb, ga, ra, gb, rb, coef, work_flat, stk, ysc, roots, colsum, qo, vo),
+     (order, order_est, gF, gS, g0, gR, HF, jumped, E, EL, P, OFS, VA, VS, GV),
+     (gLa, gLs, VLa, VLs, VST)) = borrowed(owners)
+    MKCb, accb = borrowed((MKC, acc))
     toggled = 0
     dense = False
     cap = EV.shape[0]
@@ -1761,7 +1783,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
         h_max = carry[5]
         tscale = carry[6]
     else:
-        _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+        _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKCb, accb)
         if per_state:
             rs = _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, rho_keys, rho_vals)
             h_max = reach / rs if rs > 0.0 else h_all
@@ -1812,9 +1834,9 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
             while ip < n_sched and sched_t[ip] <= t + simultaneous:
                 e = sched_e[ip]
                 if s[e]:
-                    _toggle(U, W, kc, cc, off, e, -1.0, MKC, acc)
+                    _toggle(U, W, kc, cc, off, e, -1.0, MKCb, accb)
                     kc[e] = sched_k[ip]
-                    _toggle(U, W, kc, cc, off, e, 1.0, MKC, acc)
+                    _toggle(U, W, kc, cc, off, e, 1.0, MKCb, accb)
                     toggled += 2
                     jumped[e] = True  # its force steps with the stiffness
                 else:
@@ -1923,9 +1945,9 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                 if turning:
                     # (a name, not an expression, in the call: numba's bytecode limit)
                     turning_loads = grid_loads or loads_knots
-                    _coefficients(MKC, g0, gR, q, v, h, Bv, tw, cturn, turning_loads, harmonic)
+                    _coefficients(MKCb, g0, gR, q, v, h, Bv, tw, cturn, turning_loads, harmonic)
                 else:
-                    _coefficients_frozen(MKC, g0, gR, q, v, h, Bv, ysc, HF, harmonic)
+                    _coefficients_frozen(MKCb, g0, gR, q, v, h, Bv, ysc, HF, harmonic)
                 if _converged(Bv, TAIL):
                     break
                 counts[1] += 1
@@ -2128,7 +2150,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                     n_ev += 1
                     count += 1
                     last = e
-                    _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKC, acc)
+                    _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKCb, accb)
                     toggled += 1
                     jumped[e] = True
             if per_state:
@@ -2148,9 +2170,10 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                 x[:n] = q
                 x[n:] = v
                 sched_pos[0] = ip
+                alive(owners)
                 return 2, jn - 1, n_ev, last, EV, TP, ntp, MKC, acc
             if toggled >= REFRESH:  # rounding of the updates, rebuilt from scratch
-                _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+                _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKCb, accb)
                 toggled = 0
             # an output time at the event: the state after it
             while jn <= k2 and jn <= j_in and (jn + k_org) * dt <= t + 1e-13 * dt:
@@ -2158,7 +2181,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                 jn += 1
                 count = 0
         if toggled >= REFRESH:
-            _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+            _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKCb, accb)
             toggled = 0
         while jn <= k2:  # (none left: the last piece ends at the stretch's end)
             _write(X, S, jn, q, v, s)
@@ -2175,6 +2198,7 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
         carry[4] = survived
         carry[5] = h_max
         carry[6] = tscale
+    alive(owners)
     return 0, k, n_ev, -1, EV, TP, ntp, MKC, acc
 
 

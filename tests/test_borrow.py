@@ -1,0 +1,34 @@
+"""Views without reference counts (gearmodal/integrate/borrow.py): the same data as their
+arrays, through bundles too; the kernel that uses them gives the same runs (the rest of the
+suite: every exact run goes through it)."""
+
+from collections import namedtuple
+
+import numba
+import numpy as np
+
+from gearmodal.integrate.borrow import alive, borrowed
+
+Pair = namedtuple("Pair", ["a", "b", "x"])
+
+
+@numba.njit(cache=False)
+def _write_through(n):
+    a = np.zeros(n)
+    b = np.arange(n * 2.0).reshape((n, 2))
+    owners = (Pair(a, b, 2.5), np.ones(3))
+    (p, c) = borrowed(owners)
+    for i in range(n):
+        p.a[i] = p.x * i  # written through the view
+        p.b[i, 1] = -1.0
+    s = c[0] + c[2] + p.b[1:, 0].sum()  # a slice of a view reads the array's data
+    alive(owners)
+    return owners[0].a.copy(), owners[0].b.copy(), s
+
+
+def test_a_borrowed_view_is_its_array():
+    a, b, s = _write_through(5)
+    np.testing.assert_array_equal(a, 2.5 * np.arange(5))
+    np.testing.assert_array_equal(b[:, 1], -1.0)
+    np.testing.assert_array_equal(b[:, 0], 2.0 * np.arange(5))
+    assert s == 2.0 + (2.0 + 4.0 + 6.0 + 8.0)
