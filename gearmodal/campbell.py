@@ -27,7 +27,7 @@ from .model.model import Model
 from .model.validate import plausible
 from .modetypes import LOOSE, QUIET, classify
 from .result_io import read_header, write_header
-from .whirl import log_decrement, translation_pairs, whirl
+from .whirl import log_decrement, rigid_undamped, translation_pairs, whirl
 
 #: layout version of :meth:`CampbellResult.save` (``result.json``)
 SAVE_VERSION = 1
@@ -133,7 +133,8 @@ class CampbellResult:
     Attributes
     ----------
     speeds_rpm : (n_speeds,) input speeds, rpm.
-    frequencies_hz, damping_ratios : (n_speeds, n_modes), column j follows tracked mode j.
+    frequencies_hz, damping_ratios : (n_speeds, n_modes), column j follows tracked mode j
+        (the damping ratio of a rigid-body mode: 0).
     mode_types : (n_speeds, n_modes) labels.
     macs : list of (n_modes, n_modes) MAC matrices between consecutive speeds (tracked order
         on both axes; the diagonal is the tracking MAC).
@@ -559,6 +560,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
         prev, prev_M, prev_norm = phi, Mphi, norm
         if progress is not None:
             progress(i + 1, s.size)
+    zetas = rigid_undamped(zetas, types)
     base = model.merged if isinstance(model, Coupled) else model
     order_map = default_orders(base) if orders is None else dict(orders)
     geometry = geometry_table(base)

@@ -22,7 +22,7 @@ from .errors import ModelError
 from .frames import centre
 from .model.validate import plausible
 from .result_io import read_csv, read_header, write_header
-from .whirl import log_decrement, translation_pairs, whirl
+from .whirl import log_decrement, rigid_undamped, translation_pairs, whirl
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 #: layout version of :meth:`ModalResult.save` (``result.json``)
@@ -38,7 +38,7 @@ class ModalResult:
     speed_rpm : input speed, rpm.
     frequencies_hz : undamped natural frequencies ``|lambda| / 2 pi``, ascending, Hz
         (rigid-body modes near 0 included).
-    damping_ratios : ``-Re(lambda) / |lambda|`` (0 for undamped modes).
+    damping_ratios : ``-Re(lambda) / |lambda|`` (0 for undamped modes and rigid-body modes).
     shapes : (n_dofs, n_modes) mode shapes, complex when rotating or damped, each scaled to a
         largest component of 1.
     dof_names : names of the rows of ``shapes``.
@@ -520,6 +520,7 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     types = classify(asm, shapes, freq, K=asm.stiffness(s))
     for i, lab in (labels or {}).items():
         types[int(i)] = str(lab)
+    zeta = rigid_undamped(zeta, types)
     return ModalResult(speed_rpm=speed_rpm, frequencies_hz=freq, damping_ratios=zeta,
                        shapes=shapes, dof_names=list(asm.dof_names), kinetic_energy=ke,
                        strain_energy=se, mode_types=types, model_name=name,

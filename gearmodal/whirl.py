@@ -39,6 +39,16 @@ def log_decrement(zeta) -> np.ndarray:
     return np.where(np.abs(z) >= 1.0, np.nan, out)
 
 
+def rigid_undamped(zeta, types) -> np.ndarray:
+    """``zeta`` with the damping ratio of every ``"rigid"`` mode (``types``, the same shape)
+    set to 0: a rigid-body mode's eigenvalue is zero to rounding, and at speed the gyroscopic
+    and centripetal terms split the pair into two real roundings ``+-eps``, whose ratio
+    ``-Re/|lambda|`` would read as -1 and 1 (an unstable mode and a critically damped one)."""
+    z = np.array(zeta, dtype=float)
+    z[np.asarray(types) == "rigid"] = 0.0
+    return z
+
+
 def translation_pairs(geometry, dof_names: list[str]) -> np.ndarray:
     """``(k, 2)`` row indices of the (x, y) translations of every body of ``geometry`` (a
     :attr:`gearmodal.ModalResult.geometry` table) that has both among ``dof_names``."""

@@ -64,6 +64,28 @@ def test_lin_parker_mode_structure(n, speed_rpm):
             assert all(m == mult for _, m in groups(sel)), (typ, groups(sel))
 
 
+def test_a_rigid_mode_at_speed_reads_undamped_not_unstable():
+    """The shipped planetary stage turns freely (the ring's and sun's rotations rigid): at
+    speed the gyroscopic and centripetal terms split the zero eigenvalue pair into two real
+    roundings (|lambda| about 1e-4 rad/s), whose ratio read as damping -1 and +1 (an unstable
+    mode) before; rigid modes now read 0, in the modal table and the Campbell diagram, and no
+    mode of this passive gearbox reads negative."""
+    m = gm.examples.planetary_stage()
+    for rpm in (0.0, 20.0, 100.0):
+        res = modal(m, speed_rpm=rpm)
+        rigid = np.array(res.mode_types) == "rigid"
+        assert rigid.sum() == 2
+        assert np.all(res.frequencies_hz[rigid] < 1e-3)
+        assert np.all(res.damping_ratios[rigid] == 0.0)
+        assert np.all(res.damping_ratios >= 0.0)
+        assert np.all(res.to_frame().log_dec[rigid] == 0.0)
+    camp = gm.campbell(m, np.array([0.0, 20.0, 100.0]))
+    rigid = camp.mode_types == "rigid"
+    assert rigid.sum() == 6
+    assert np.all(camp.damping_ratios[rigid] == 0.0)
+    assert np.all(camp.damping_ratios >= -1e-12)  # the undamped modes' rounding
+
+
 def test_unequal_spacing_breaks_degeneracy():
     res = modal(gm.lin_parker_stage(4, **LP, pressure_angle=ALPHA,
                                     planet_angles=[0.0, 1.4, 3.3, 4.6]))
