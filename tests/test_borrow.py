@@ -32,3 +32,19 @@ def test_a_borrowed_view_is_its_array():
     np.testing.assert_array_equal(b[:, 1], -1.0)
     np.testing.assert_array_equal(b[:, 0], 2.0 * np.arange(5))
     assert s == 2.0 + (2.0 + 4.0 + 6.0 + 8.0)
+
+
+@numba.njit(cache=False)
+def _with_a_list(n):
+    owners = (np.zeros(2), [1.0] * n, "gear")
+    arr, values, name = borrowed(owners)  # the list and the string keep their references
+    arr[0] = values[n - 1] + len(name)
+    alive(owners)
+    return owners[0][0], sum(owners[1])
+
+
+def test_what_is_not_an_array_is_passed_on_counted():
+    """A bundle member numba counts references on that is not an array (a list, a string)
+    comes back as itself with its reference taken (without it, one decref too many freed the
+    list twice: the heap's check aborted)."""
+    assert _with_a_list(50) == (5.0, 50.0)

@@ -24,12 +24,11 @@ __all__ = ["borrowed", "alive"]
 
 
 def _borrow(context, builder, ty, val):
+    """``val`` of type ``ty`` as a new reference (numba's rule for an intrinsic's result) whose
+    arrays own nothing."""
     if isinstance(ty, types.Array):
-        ary = make_array(ty)(context, builder, val)
-        out = make_array(ty)(context, builder)
-        for k in ("data", "shape", "strides", "itemsize", "nitems"):
-            setattr(out, k, getattr(ary, k))
-        out.meminfo = cgutils.get_null_value(out.meminfo.type)
+        out = make_array(ty)(context, builder, val)  # every field of the array, then
+        out.meminfo = cgutils.get_null_value(out.meminfo.type)  # no owner to count
         out.parent = cgutils.get_null_value(out.parent.type)
         return out._getvalue()
     if isinstance(ty, types.BaseTuple):
@@ -37,7 +36,9 @@ def _borrow(context, builder, ty, val):
             part = _borrow(context, builder, member, builder.extract_value(val, i))
             val = builder.insert_value(val, part, i)
         return val
-    return val  # a number, a boolean: no reference
+    # anything else (a number: nothing; a list, a string: its reference) as it is, counted
+    context.nrt.incref(builder, ty, val)
+    return val
 
 
 @intrinsic
