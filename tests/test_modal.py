@@ -65,7 +65,7 @@ def test_lin_parker_mode_structure(n, speed_rpm):
 
 
 def test_a_rigid_mode_at_speed_reads_undamped_not_unstable():
-    """The shipped planetary stage turns freely (the ring's and sun's rotations rigid): at
+    """The example planetary stage turns freely (the ring's and sun's rotations rigid): at
     speed the gyroscopic and centripetal terms split the zero eigenvalue pair into two real
     roundings (|lambda| about 1e-4 rad/s), whose ratio read as damping -1 and +1 (an unstable
     mode) before; rigid modes now read 0, in the modal table and the Campbell diagram, and no
