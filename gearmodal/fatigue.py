@@ -467,6 +467,42 @@ def equivalent_loads(result, p: float, *, t_from: float = 0.0) -> pd.DataFrame |
     return out
 
 
+class UpperPercentile:
+    """The ``q``-th percentile (numpy's default, linear) of ``n`` values that come in chunks,
+    from the few largest alone: with ``h = (n - 1) q / 100`` it interpolates the order
+    statistics ``floor(h)`` and ``floor(h) + 1`` (ascending), both among the ``n - floor(h)
+    + 1`` largest, so only those are kept (1 % of a run's rows and two for the 99th; the rows
+    no longer sit in memory). :meth:`value` is ``np.percentile`` of all of them, to the bit
+    (numpy's formula: ``a + (b - a) g``, or ``b - (b - a)(1 - g)`` where ``g >= 1/2``)."""
+
+    def __init__(self, n: int, q: float):
+        self.n, self.q = int(n), float(q)
+        self.h = (self.n - 1) * (self.q / 100.0)
+        self.lo = min(max(int(math.floor(self.h)), 0), max(self.n - 1, 0))
+        self.m = self.n - self.lo + 1  # the largest ones kept (one more than needed)
+        self.top = np.empty(0)
+        self.seen = 0
+
+    def push(self, values) -> None:
+        x = np.asarray(values, dtype=float).ravel()
+        self.seen += x.size
+        both = np.concatenate([self.top, x])
+        if both.size > self.m:
+            both = np.partition(both, both.size - self.m)[both.size - self.m:]
+        self.top = both
+
+    def value(self) -> float:
+        if self.seen != self.n or self.n == 0:
+            raise ModelError("n", f"= {self.n}: {self.seen} values came")
+        top = np.sort(self.top)
+        first = self.n - top.size  # the rank of top[0] among all the values
+        a = top[self.lo - first]
+        b = top[min(self.lo + 1, self.n - 1) - first]
+        g = self.h - math.floor(self.h)
+        d = b - a
+        return float(b - d * (1.0 - g) if g >= 0.5 else a + d * g)
+
+
 #: load levels of the lifetime LDD/LRD tables of :func:`drivetrain_fatigue` (N m, N, N):
 #: fixed edges, so that runs add up bin by bin
 LEVELS = {"rotor_torque_Nm": np.linspace(-2e5, 6e5, 81),
@@ -536,34 +572,44 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
     # (one pass over the turning points for every channel and exponent)
     exact = turning_dels(sim, (ex["tooth_root"], ex["tooth_flank"], ex["bearing"]),
                          [*flanks, *(f"{b}.radial" for b in bearings)], t_skip, n_ref)
+    # the bearings' equivalent loads and the load spectra from the exact solution where the
+    # run has them (independent of the output step), else from the rows
+    peq = equivalent_loads(sim, ex["bearing"], t_from=t_skip)
+    # the rows are kept only where a statistic has no exact source (a run without the exact
+    # tables); the 99th percentiles need the largest 1 % of them (UpperPercentile)
+    keep_rows = exact is None or peq is None or next(sim.level_chunks(), None) is None
+    n = sum(int(np.count_nonzero(np.asarray(f.index, dtype=float) >= t_skip))
+            for f in sim.force_chunks([]))
+    p99 = {k: UpperPercentile(n, 99.0) for k in ("teeth", *bearings)}
     # the run's forces a chunk of rows at a time (a stored run's row groups): the flank forces
-    # counted as they come (RainflowStream) where there are no turning points, the few signals
-    # the rest needs kept per row
+    # counted as they come (RainflowStream) where there are no turning points
     streams = {c: RainflowStream((ex["tooth_root"], ex["tooth_flank"])) for c in flanks}
     keep: dict[str, list] = {k: [] for k in ("t", "speed", "teeth", *bearings)}
     for f in sim.force_chunks([*flanks, *(f"{b}.{d}" for b in bearings for d in "xy")]):
         f = f[f.index >= t_skip]
         if f.empty:
             continue
-        keep["t"].append(np.asarray(f.index, dtype=float))
-        keep["speed"].append(tur["rotor_speed_rpm"].reindex(f.index, method="nearest")
-                             .to_numpy())
-        keep["teeth"].append(f[flanks].max(axis=1).to_numpy())
-        for b in bearings:
-            keep[b].append(np.hypot(f[f"{b}.x"], f[f"{b}.y"]).to_numpy())
+        per_row = {"teeth": f[flanks].max(axis=1).to_numpy(),
+                   **{b: np.hypot(f[f"{b}.x"], f[f"{b}.y"]).to_numpy() for b in bearings}}
+        for k, x in per_row.items():
+            p99[k].push(x)
+            if keep_rows:
+                keep[k].append(x)
+        if keep_rows:
+            keep["t"].append(np.asarray(f.index, dtype=float))
+            keep["speed"].append(tur["rotor_speed_rpm"].reindex(f.index, method="nearest")
+                                 .to_numpy())
         if exact is None:
             for c in flanks:
                 streams[c].feed(f[c].to_numpy())
-    t = np.concatenate(keep["t"])
-    index = pd.Index(t, name="time")
-    speed = np.concatenate(keep["speed"])
-    teeth = np.concatenate(keep["teeth"])
-    radial = {b: pd.Series(np.concatenate(keep[b]), index=index) for b in bearings}
+    if keep_rows:
+        t = np.concatenate(keep["t"])
+        index = pd.Index(t, name="time")
+        speed = np.concatenate(keep["speed"])
+        teeth = np.concatenate(keep["teeth"])
+        radial = {b: pd.Series(np.concatenate(keep[b]), index=index) for b in bearings}
     ratio = float(planet_spin)
     rotor_rpm = tur["rotor_speed_rpm"]  # on the turbine's (aerodynamic) step
-    # the bearings' equivalent loads and the load spectra from the exact solution where the
-    # run has them (independent of the output step), else from the rows
-    peq = equivalent_loads(sim, ex["bearing"], t_from=t_skip)
     t_end = sim.time_span()[1]
     if peq is not None:
         peq = peq.rename(index=lambda c: c[:-len(".radial")])
@@ -602,20 +648,22 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
            "life_exact": peq is not None,
            "del_rotor_torque_Nm": damage_equivalent_load(rotor, ex["tooth_root"], n_ref),
            "max_front_force_N": float(sim.peaks(t_skip)["peak_force_N"][flanks].max()),
-           "p99_tooth_force_N": float(np.percentile(teeth, 99.0)),
-           "p99_planet_bearing_force_N": float(np.percentile(radial[worst], 99.0)),
+           "p99_tooth_force_N": p99["teeth"].value(),
+           "p99_planet_bearing_force_N": p99[worst].value(),
            "mean_power_W": float(tur["power_W"][tur.index >= t_skip].mean())}
     if tables:
-        row["tables"] = {"spectra": _spectra(sim, flanks, worst, teeth, radial[worst],
-                                             rotor, rotor_rpm, index, speed, t_skip)}
+        kept = (teeth, radial[worst], index, speed) if keep_rows else None
+        row["tables"] = {"spectra": _spectra(sim, flanks, worst, rotor, rotor_rpm, kept,
+                                             t_skip)}
     return row
 
 
-def _spectra(sim, flanks, worst, teeth, radial, rotor, rotor_rpm, index, speed, t_skip):
+def _spectra(sim, flanks, worst, rotor, rotor_rpm, kept, t_skip):
     """:func:`drivetrain_fatigue`'s LDD and LRD tables at :data:`LEVELS`: the rotor torque on
     the turbine's step; the largest flank force and the ``worst`` planet bearing's radial
     force from the run's exact level changes (:func:`level_spectrum`) where it has them, else
-    from the output rows (``teeth``, ``radial`` on ``index`` with the rotor ``speed``)."""
+    from the output rows ``kept`` = ``(teeth, radial, index, speed)`` (the largest flank
+    force and the bearing's on the rows' times ``index``, with the rotor ``speed``)."""
     # the rotor torque: each aerodynamic step's value held over its step (the last to the
     # run's end), its revolutions at the step's rotor speed
     edges = LEVELS["rotor_torque_Nm"]
@@ -628,11 +676,12 @@ def _spectra(sim, flanks, worst, teeth, radial, rotor, rotor_rpm, index, speed, 
                            "quantity": "rotor_torque_Nm",
                            "revolutions": np.bincount(k, held * spin,
                                                       minlength=len(edges) - 1)})]
-    for name, channels, rows in (("tooth_force_N", flanks, teeth),
-                                 ("planet_bearing_force_N", [f"{worst}.radial"], radial)):
+    for j, (name, channels) in enumerate((("tooth_force_N", flanks),
+                                          ("planet_bearing_force_N", [f"{worst}.radial"]))):
         edges = LEVELS[name]
         exact = level_spectrum(sim, channels, t_from=t_skip)
         if exact is None:
+            rows, index, speed = kept[j], kept[2], kept[3]
             x = pd.Series(np.clip(np.asarray(rows), edges[0], edges[-1]), index=index)
             exact = load_duration(x, edges).assign(
                 revolutions=load_revolutions(x, pd.Series(speed, index=index), edges)

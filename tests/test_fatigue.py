@@ -118,3 +118,23 @@ def test_a_streamed_count_is_the_whole_count():
         one = fatigue.RainflowStream([3.0])
         one.feed([1.0])
         one.close()
+
+
+def test_the_upper_percentile_of_chunks_is_numpys():
+    """UpperPercentile keeps the largest values alone (1 % and two for the 99th) and gives
+    np.percentile of all of them to the bit: random sizes, scales, ties, chunkings and
+    percentiles, the ends included."""
+    from gearmodal.fatigue import UpperPercentile
+
+    rng = np.random.default_rng(7)
+    for trial in range(400):
+        n = int(rng.integers(1, 2500))
+        x = rng.standard_normal(n) * 10 ** rng.uniform(-3, 6)
+        if trial % 5 == 0:
+            x = np.round(x, 1)  # ties
+        for q in (99.0, 95.0, 50.0, 0.0, 100.0):
+            p = UpperPercentile(n, q)
+            for part in np.array_split(x, int(rng.integers(1, 12))):
+                p.push(part)
+            assert p.value() == np.percentile(x, q)
+            assert p.top.size <= n - int((n - 1) * q / 100.0) + 1
