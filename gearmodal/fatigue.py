@@ -580,6 +580,8 @@ def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: 
     keep_rows = exact is None or peq is None or next(sim.level_chunks(), None) is None
     n = sum(int(np.count_nonzero(np.asarray(f.index, dtype=float) >= t_skip))
             for f in sim.force_chunks([]))
+    if n == 0:
+        raise ModelError("t_skip", f"= {t_skip!r}: no output row at or after it")
     p99 = {k: UpperPercentile(n, 99.0) for k in ("teeth", *bearings)}
     # the run's forces a chunk of rows at a time (a stored run's row groups): the flank forces
     # counted as they come (RainflowStream) where there are no turning points
