@@ -29,7 +29,11 @@ import pandas as pd
 
 from .errors import ModelError
 
-__all__ = ["LevelSweep", "Unsorted"]
+__all__ = ["LevelSweep", "Unsorted", "MARK"]
+
+#: the channel of the level-change table's marks of the model input's revolutions (bin -1;
+#: written by :mod:`gearmodal.integrate.turns`)
+MARK = "input"
 
 
 class Unsorted(Exception):
@@ -40,12 +44,11 @@ class Unsorted(Exception):
 class LevelSweep:
     """(L1)-(L2) over ``channels`` (names of the level-change table) on the level ``edges``,
     from ``t_from`` to ``t_to`` (s): :meth:`feed` the table's chunks in time order, then
-    :meth:`table`. The rows of channel ``mark`` carry the input's revolutions only."""
+    :meth:`table`. The rows of channel :data:`MARK` carry the input's revolutions only."""
 
-    def __init__(self, channels: list[str], edges: np.ndarray, t_from: float, t_to: float,
-                 mark: str = "input"):
+    def __init__(self, channels: list[str], edges: np.ndarray, t_from: float, t_to: float):
         self.channels = list(channels)
-        self.lookup = pd.Index([*self.channels, mark])
+        self.lookup = pd.Index([*self.channels, MARK])
         self.edges = np.asarray(edges, dtype=float)
         self.t_from, self.t_to = float(t_from), float(t_to)
         nb = len(self.edges) - 1

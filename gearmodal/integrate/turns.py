@@ -29,14 +29,13 @@ import numpy as np
 import pandas as pd
 
 from ..fatigue import LEVELS
+from ..levelsweep import MARK
 from .taylor import LEVEL0
 
 __all__ = ["TurnPoints", "turn_table", "level_table", "TURN_COLUMNS", "LEVEL_COLUMNS"]
 
 #: the columns of the turning-point table (its index is ``time``)
 TURN_COLUMNS = ("channel", "force_N")
-#: the channel of the level-change table's marks of the input's revolutions (bin -1)
-MARK = "input"
 #: the columns of the level-change table (its index is ``time``)
 LEVEL_COLUMNS = ("channel", "bin", "level_low_N", "level_high_N", "input_revolutions")
 #: rows of the kernel's first point buffer (it grows as a run needs)
