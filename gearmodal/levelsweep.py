@@ -14,8 +14,8 @@ the span's ends ``t_from``, ``t_to`` interpolated between the rows around them) 
 
 :class:`LevelSweep` takes the table's rows in time order, a chunk at a time, and keeps only
 each channel's current bin, the open interval's start and the sums: a stored 600 s turbine
-run's 2.0 million level changes no longer sit in memory at once (the call took 316 MB, now
-76 MB, most of it Arrow's first read: ``benchmarks/fatigue_memory.py``). A chunk's rows
+run's 2.0 million level changes no longer sit in memory at once (the call took 306 MB, now
+70 MB, most of it Arrow's first read: ``benchmarks/fatigue_memory.py``). A chunk's rows
 at its last instant wait for the next chunk (more rows of that instant may follow), and a
 span end waits for the first row after it (its ``R``).
 """
