@@ -48,3 +48,27 @@ def test_what_is_not_an_array_is_passed_on_counted():
     comes back as itself with its reference taken (without it, one decref too many freed the
     list twice: the heap's check aborted)."""
     assert _with_a_list(50) == (5.0, 50.0)
+
+
+def test_a_kernel_elsewhere_uses_alive_after_a_test_bundle(tmp_path):
+    """``alive`` is generic: called above with this module's ``Pair``, a cached index of it
+    would hold that type, and a process that cannot import this module (a user's script, a
+    benchmark) failed to load it ("No module named 'test_borrow'") when it compiled a kernel.
+    It is not cached."""
+    import subprocess
+    import sys
+
+    code = ("import numba, numpy as np\n"
+            "from gearmodal.integrate.borrow import alive, borrowed\n"
+            "@numba.njit\n"
+            "def f(a):\n"
+            "    b = borrowed(a)\n"
+            "    t = b.sum()\n"
+            "    alive(a)\n"
+            "    return t\n"
+            "print(f(np.ones(3)))\n")
+    _write_through(2)  # alive compiled with Pair in this process
+    r = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-400:]
+    assert r.stdout.strip() == "3.0"

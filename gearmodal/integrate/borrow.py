@@ -51,8 +51,10 @@ def borrowed(typingctx, x):
     return x(x), codegen
 
 
-@numba.njit(cache=True, inline="never")
+@numba.njit(inline="never")
 def alive(owners) -> None:
     """Names ``owners`` (the arrays or bundles borrowed from) where a kernel returns, so that
-    numba keeps them until then."""
+    numba keeps them until then. (Not cached: a cached index of this generic function would
+    hold every type it was called with, a test module's too, and fail to load where that
+    module is not importable; the kernels calling it are cached with it compiled in.)"""
     return None
