@@ -120,6 +120,23 @@ TurnChannels = namedtuple("TurnChannels", "TCH TCW TS")
 TurnWork = namedtuple("TurnWork", "fx fy P tmp taus spd rev XN WN BN AQ")
 
 
+#: A piece's states (:func:`~.taylor.taylor_run`'s phases): positions and velocities at its
+#: start ``q``, ``v`` and end ``qb``, ``vb``, the gaps and their rates there (``ga``, ``ra``,
+#: ``gb``, ``rb``) and an output row's state ``qo``, ``vo``.
+PieceState = namedtuple("PieceState", "q v qb vb ga ra gb rb qo vo")
+
+#: The force terms of the series (:func:`~.taylor.taylor_run`): ``M^-1 F`` of the force grid
+#: at the stretch start ``gF`` and its rate ``gS``, at the piece's start ``g0`` with the rate
+#: ``gR``; the turning load harmonics of the grid ``VA``, ``VS`` and at the piece's start ``GV``,
+#: ``GVS``; the loads on their own knots ``gLa``, ``gLs`` and harmonics ``VLa``, ``VLs``.
+Forcing = namedtuple("Forcing", "gF gS g0 gR VA VS GV GVS gLa gLs VLa VLs")
+
+#: The root search's scratch (:func:`~.taylor._first_crossing`): a gap's series ``coef``, the
+#: subdivision's rows ``wflat`` and stack ``stk``, each contact's first ``roots``, the
+#: coordinates' tail sums ``colsum`` and the search ``order`` with its estimates ``est``.
+RootWork = namedtuple("RootWork", "coef wflat stk roots colsum order est")
+
+
 # -- the "expm" propagator's kernels (:mod:`gearmodal.integrate.kernels`) ---------------------
 #: A contact state's propagators over the dyadic steps ``dt / 2^j``: ``PHI[j]``, the force
 #: maps ``G0[j]``, ``G1[j]``, the constant part ``FS[j]``, and whether level ``j`` is there

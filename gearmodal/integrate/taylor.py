@@ -30,17 +30,15 @@ that came quickly, the next piece is a quarter as long with fewer terms (the nex
 likely near).
 
 The kernel's layout: :func:`taylor_run` takes its arguments in the named bundles of
-:mod:`gearmodal.integrate.bundles` and walks the pieces in one body. Numba takes and drops an
-atomic reference on every array bound at a call boundary, inlined or not, and its reference
-pruning does not remove them in a body of this size: splitting the per-piece loop into named
-phases that receive the bundles made the event-dense gear rattle 5.8 times slower (920 such
-operations per piece against 37, counted with a debugger on ``NRT_incref``/``NRT_decref``:
-about 5 ns each); a phase taking only the arrays it uses still costs about 10 ns per array,
-1 % of a rattle piece (under a microsecond) each. So the phases a piece goes through are
-commented blocks of one body, and the helpers it calls receive just what they read. And the
-body reads its arrays as borrowed views (:mod:`gearmodal.integrate.borrow`: no meminfo, so the
-reference operations that remain skip their atomic instruction), its own arrays kept alive to
-both returns by ``owners``.
+:mod:`gearmodal.integrate.bundles` and walks the pieces through named phases (the force terms
+of a stretch and of a piece, the time events and load knots that end a piece, its series, the
+gaps at its ends, the first crossing, the output rows, the switch), each a function inlined
+into the loop (``inline="always"``). Numba takes and drops a reference on every array bound at
+a call boundary, inlined or not; the phases read borrowed views
+(:mod:`gearmodal.integrate.borrow`: no meminfo, so those operations skip their atomic
+instruction), the kernel's own arrays kept alive to both returns by ``owners``. (Before the
+views, the same split made the event-dense gear rattle 5.8 times slower: 920 atomic
+operations per piece against 37.)
 """
 
 from __future__ import annotations
@@ -61,10 +59,13 @@ from .bundles import (
     Chain,
     Channels,
     ContactRows,
+    Forcing,
     Loads,
     Out,
     Peaks,
     PeakWork,
+    PieceState,
+    RootWork,
     Schedule,
     Search,
     Sparse,
@@ -219,6 +220,43 @@ def _coefficients_frozen(MKC, g0, g1, q, v, h, B, y, HF, harmonic):
                 B[k + 2, i] += HF[k, i] * h2 * den
 
 
+@numba.njit(cache=True, inline="always")
+def _cauchy(k, B, h_lo, rates, tw):
+    """The Cauchy products (T2) of what term ``k`` knows, into ``tw.Y`` (``b_0 .. b_k``) and,
+    with ``rates``, ``tw.Yd`` (``b_1 .. b_(k+1)``), harmonics from ``h_lo``; the turning
+    coordinates' row ``k + 1`` of ``B`` into ``tw.Bt``. (Inlined into :func:`_coefficients`'
+    per-term loop; its arrays are borrowed views there: no reference counts.)"""
+    tcols, E, EL, Y, Yd, Bt = tw[0], tw[5], tw[6], tw[7], tw[8], tw[9]
+    n_terms = B.shape[0]
+    nT = tcols.shape[0]
+    if k + 1 < n_terms:
+        for c in range(nT):
+            Bt[k + 1, c] = B[k + 1, tcols[c]]
+    for hh in range(h_lo, E.shape[0]):
+        for c in range(nT):
+            Y[0, hh, k, c] = 0.0
+            Y[1, hh, k, c] = 0.0
+        for j in range(min(k + 1, EL[hh])):
+            er = E[hh, j].real
+            ei = E[hh, j].imag
+            for c in range(nT):
+                b = Bt[k - j, c]
+                Y[0, hh, k, c] += er * b
+                Y[1, hh, k, c] += ei * b
+        if rates and k + 1 < n_terms:
+            for c in range(nT):
+                Yd[0, hh, k, c] = 0.0
+                Yd[1, hh, k, c] = 0.0
+            for j in range(min(k + 1, EL[hh])):
+                f = k - j + 1.0
+                er = E[hh, j].real * f
+                ei = E[hh, j].imag * f
+                for c in range(nT):
+                    b = Bt[k - j + 1, c]
+                    Yd[0, hh, k, c] += er * b
+                    Yd[1, hh, k, c] += ei * b
+
+
 @numba.njit(cache=True, fastmath=True)
 def _coefficients(MKC, g0, g1, q, v, h, B, tw, cturn, loads, harmonic):
     """Scaled Taylor rows ``B[k] = a_k h^k`` of the positions: the frozen part by (T1) with
@@ -267,33 +305,7 @@ def _coefficients(MKC, g0, g1, q, v, h, B, tw, cturn, loads, harmonic):
     for c in range(nT):
         Bt[0, c] = B[0, tcols[c]]
     for k in range(n_terms):
-        # the Cauchy products of what is known: b_0..b_k (and b_(k+1) for the rates)
-        if k + 1 < n_terms:
-            for c in range(nT):
-                Bt[k + 1, c] = B[k + 1, tcols[c]]
-        for hh in range(h_lo, H1):
-            for c in range(nT):
-                Y[0, hh, k, c] = 0.0
-                Y[1, hh, k, c] = 0.0
-            for j in range(min(k + 1, EL[hh])):
-                er = E[hh, j].real
-                ei = E[hh, j].imag
-                for c in range(nT):
-                    b = Bt[k - j, c]
-                    Y[0, hh, k, c] += er * b
-                    Y[1, hh, k, c] += ei * b
-            if rates and k + 1 < n_terms:
-                for c in range(nT):
-                    Yd[0, hh, k, c] = 0.0
-                    Yd[1, hh, k, c] = 0.0
-                for j in range(min(k + 1, EL[hh])):
-                    f = k - j + 1.0
-                    er = E[hh, j].real * f
-                    ei = E[hh, j].imag * f
-                    for c in range(nT):
-                        b = Bt[k - j + 1, c]
-                        Yd[0, hh, k, c] += er * b
-                        Yd[1, hh, k, c] += ei * b
+        _cauchy(k, B, h_lo, rates, tw)
         for e in range(nTC):
             pr = -OFS[e, k]
             pd = 0.0
@@ -328,9 +340,7 @@ def _coefficients(MKC, g0, g1, q, v, h, B, tw, cturn, loads, harmonic):
         if zsrc.shape[0] < o - 2 * n:  # the kept Z columns, in place (zsrc[j] >= j)
             for j in range(zsrc.shape[0]):
                 y[2 * n + j] = y[2 * n + zsrc[j]]
-        # the frozen part of (T1): B[k + 2] = MKC [c2 B[k]; c1 B[k + 1]; y_Z], written out
-        # here (a helper, inlined or called, takes and drops an atomic reference count on
-        # each of its arrays per term: 12 % of an event-dense run)
+        # the frozen part of (T1): B[k + 2] = MKC [c2 B[k]; c1 B[k + 1]; y_Z]
         c2 = -h2 * den
         c1 = -(k + 1.0) * h * den
         for j in range(n):
@@ -1549,79 +1559,18 @@ def _write(X, S, j, q, v, s):
 
 
 @numba.njit(cache=True)
-def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, chain):
-    """Propagate output steps ``call.k0 .. call.n_steps - 1`` from state ``call.x`` in contact
-    state ``call.s``; the arguments are the bundles of :mod:`gearmodal.integrate.bundles`.
-
-    ``call.F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
-    ``sy.MinvU`` (linear in between); rows ``X[k + 1]``, ``S[k + 1]`` are written after each
-    step and every contact-state change appended to ``out.EV`` (time, contact, before,
-    after, rate, force, and on a row that opens a contact the peak force of the episode it
-    ends and its time, else NaN) from row ``out.n_ev``. Returns ``(status, k, n_ev, contact,
-    EV, TP, ntp, MKC, acc)``: status 0 = done; 2 = more than ``max_events`` changes inside
-    step ``k``, the last at ``contact``; ``EV`` and ``TP`` the event and turning-point rows
-    (larger arrays than the ones passed if they ran full), ``MKC``, ``acc`` the state
-    matrices (a chained call's carry). ``out.counts`` (int64, 7) accumulates the pieces summed,
-    the pieces halved (a state stiffer than ``h_max`` allows), the gap polynomials searched
-    for a root, the Taylor rows computed, and the peak work (:func:`_track_peaks`).
-    ``call.tie`` (s): crossings this close are switched together, time events this close to a
-    piece's end are applied there (``SIMULTANEOUS`` times the system's time scale: nothing
-    that moves the solution depends on ``dt``, which only places the output rows, beyond
-    rounding of ``k dt`` when the step is not halved or doubled).
-
-    The scheduled stiffness changes ``sched`` (alternating mesh stiffness,
-    :mod:`gearmodal.model.mesh_stiffness`) end a piece at their time and are applied there
-    exactly, to a closed contact as a rank-one update (a time event: no state change, no log
-    entry). Turning geometry ``geo`` (:mod:`gearmodal.integrate.periodic`; empty arrays for a
-    frozen system): the input azimuth is ``psi0 + om t``, the turning contacts' rows are zero
-    in ``W``, ``U`` and ``off`` (their gaps come from their series), each piece summed by (T2)
-    of :func:`_coefficients`. ``loads``: loads on their own time structure added to ``F`` (so
-    that the output step only places rows): a piece ends at every knot, as at a time event;
-    harmonic loads are summed into every piece's series (:func:`_harmonic_rows`).
-
-    Exact peaks (``peaks.track``; :class:`~gearmodal.integrate.peaks.PeakTracker`) and
-    turning points (:class:`~gearmodal.integrate.turns.TurnPoints`) of the contacts and the
-    spring channels ``chans``: every piece is searched (:func:`_track_peaks`,
-    :func:`_track_turns`); times are absolute (``peaks.t_call``: this call's start).
-
-    A run advanced over several calls (:class:`~gearmodal.integrate.stepper.Stepper`): row
-    ``j`` of ``F``, ``X``, ``S`` is at time ``(j + call.k_org) dt`` and every time (knots,
-    schedule, events, peaks and turning points; ``t_call`` then 0) is from the run's start;
-    ``chain.carry`` holds what the last call left (``carry[0] > 0``: ``chain.MKC``,
-    ``chain.acc`` are its state matrices, then its refresh count, dense flag, lazy-bound flag
-    and count, piece limit and term scale) and is written at the end, so that the calls walk
-    the pieces one call would. ``chain.t_span`` (2,): the call's start and end times when the
-    caller gives them (a stepper on its re-basing grid, whose times do not depend on ``dt``):
-    the pieces start and end there and the last row is the end state; empty: ``(k0 + k_org)
-    dt`` and ``(n_steps + k_org) dt``.
-    """
-    # the bundles' fields under the names the body reads (once per call; the per-piece loop
-    # is one body: the module's notes on the kernel's layout)
-    # (the arrays the caller keeps through the call, borrowed: without reference counts,
-    # borrow.py; not those returned, EV, TP, MKC_in, acc_in)
-    MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU = borrowed(sy)
-    F, x, s, k0, n_steps, k_org, dt, h_max, terms, tscale, simultaneous, max_events = \
-        borrowed(call)
-    X, S, EV, n_ev, counts = out
-    X, S, counts = borrowed((X, S, counts))
-    sched_t, sched_e, sched_k, sched_pos = borrowed(sched)
-    om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT = borrowed(geo)
-    reach, per_state, Ksym, Wl, km, cb, kappa, rho_keys, rho_vals = borrowed(bound)
-    TL, FL, MinvUL, GTL, HX, HNU = borrowed(loads)
-    track, EP, PB, pbin, PC, PM, PN, t_call = borrowed(peaks)
-    (sptr, sidx, sval), ch_k, ch_c, ch_p = borrowed(chans)
-    TCH, TCW, TS, TP, ntp = turns
-    TCH, TCW, TS = borrowed((TCH, TCW, TS))
-    carry, MKC_in, acc_in, t_span = chain
-    carry, t_span = borrowed((carry, t_span))
-    N = x.shape[0]
-    n = N // 2
-    nc = W.shape[0]
-    # [M^-1 K_s, M^-1 C_s] and, for a turning system, the columns Z of the turning harmonics'
-    # rows (T2): Re/Im of ZK_h (h >= 1) on Re/Im of Y_h, then of ZC_h on Yd_h; one product
+def _turning_columns(n, geo):
+    """The state matrix ``[M^-1 K_s, M^-1 C_s]`` (filled by :func:`_state_matrices`) and, for a
+    turning system, the columns Z of the turning harmonics' rows (T2): Re/Im of ZK_h (h >= 1)
+    on Re/Im of Y_h, then of ZC_h on Yd_h, one product. Z columns zero in every row are dropped
+    (a harmonic touches only its own frame's coordinates: two turning carriers share few);
+    ``zsrc`` maps the kept ones to their place in the full layout, where :func:`_coefficients`
+    writes them first. Returns ``(MKC, zsrc, nz, cturn)``: ``nz`` the full layout's Z columns,
+    ``cturn`` a turning damping (constant over the run)."""
+    harm, tcols, krows, ZK, ZC = geo[2], geo[3], geo[4], geo[6], geo[7]
     H1 = harm.shape[0]
     nT = tcols.shape[0]
-    cturn = False  # a turning damping (constant over the run)
+    cturn = False
     for hh in range(1, H1):
         for i in krows:
             for c in range(nT):
@@ -1643,9 +1592,6 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
                     MKC[i, o + c] = ZC[hh, i, c].real
                     MKC[i, o + nT + c] = -ZC[hh, i, c].imag
             o += 2 * nT
-    # Z columns zero in every row are dropped from the product (a harmonic touches only its
-    # own frame's coordinates: two turning carriers share few); ``zsrc`` maps the kept ones
-    # to their place in the full layout, where _coefficients writes them first
     nzk = 0
     zsrc = np.empty(nz, dtype=np.int64)
     for jz in range(nz):
@@ -1662,542 +1608,736 @@ def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, cha
             for j in range(nzk):
                 MKCc[i, 2 * n + j] = MKC[i, 2 * n + zsrc[j]]
         MKC = MKCc
-    zsrc = zsrc[:nzk]
+    return MKC, zsrc[:nzk], nz, cturn
+
+
+@numba.njit(cache=True)
+def _scratch(x, s, sy, geo, n_terms, nz, zsrc):
+    """The arrays :func:`taylor_run` works in, allocated once per call: the piece's series
+    ``B`` (n_terms, n) and the bundles of :mod:`~gearmodal.integrate.bundles` its phases read
+    (``PieceState`` from the start state ``x``, ``Forcing``, ``RootWork``, ``TurningWork``,
+    ``ContactRows`` of contact state ``s``, ``PeakWork``, ``Search``, ``TurnWork``)."""
+    MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU = sy
+    om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT = geo
+    n = x.shape[0] // 2
+    nc = W.shape[0]
+    H1 = harm.shape[0]
+    nT = tcols.shape[0]
+    nTC = tc_idx.shape[0]
+    st = PieceState(x[:n].copy(), x[n:].copy(), np.empty(n), np.empty(n), np.empty(nc),
+                    np.empty(nc), np.empty(nc), np.empty(nc), np.empty(n), np.empty(n))
+    c = np.complex128
+    fo = Forcing(np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.zeros((H1, n), c),
+                 np.zeros((H1, n), c), np.zeros((H1, n), c), np.zeros((H1, n), c), np.zeros(n),
+                 np.zeros(n), np.zeros((H1, n), c), np.zeros((H1, n), c))
+    stk = np.empty((2, DEPTH + 1))
+    rw = RootWork(np.empty(n_terms), np.empty((DEPTH + 5) * n_terms), stk, np.empty(nc),
+                  np.empty(n), np.empty(nc, dtype=np.int64), np.empty(nc))
+    FT = np.zeros((nTC, n_terms))
+    tw = TurningWork(tcols, urows, TW, TU, np.empty(2 * n + nz),
+                     np.zeros((H1, n_terms), dtype=np.complex128),
+                     np.full(H1, n_terms, dtype=np.int64),  # E_h's terms up to a negligible one
+                     np.empty((2, H1, n_terms, nT)), np.empty((2, H1, n_terms, nT)),
+                     np.empty((n_terms, nT)), np.zeros((nTC, n_terms)), np.empty(nTC),
+                     np.empty(nTC), np.empty(nTC, dtype=np.bool_), np.zeros((nTC, n_terms)),
+                     np.zeros((nTC, n_terms)), FT, fo.GV, fo.GVS, np.zeros((n_terms, n)), zsrc)
+    # the contacts that jumped at the current piece's start (exact turning points)
+    con = ContactRows(s, np.zeros(nc, dtype=np.bool_), kc, cc, off, Sparse(wptr, widx, wval),
+                      tc_idx, FT)
+    pfx = np.zeros(n_terms)
+    pfy = np.zeros(n_terms)
+    ptmp = np.zeros(n_terms)
+    pP = np.zeros(2 * n_terms)
+    pw = PeakWork(np.empty(n), np.empty(n), pfx, pfy, pP, ptmp)
+    sw = Search(np.zeros(2 * n_terms), np.zeros(2 * n_terms),
+                np.empty((DEPTH + 5) * 2 * n_terms), stk)
+    nq = 16 * (2 * n_terms + 8)  # the load integrals' nodes, weights, bins, values
+    tkw = TurnWork(pfx, pfy, pP, ptmp, np.empty(2 * n_terms), np.zeros(2 * n_terms),
+                   np.zeros(6 * n_terms + 4), np.empty(nq), np.empty(nq),
+                   np.empty(nq, dtype=np.int64), np.empty(nq))
+    return np.empty((n_terms, n)), st, fo, rw, tw, con, pw, sw, tkw
+
+
+@numba.njit(cache=True)
+def _setup(x, s, sy, geo, n_terms, chain):
+    """The state matrices ``MKC``, ``acc`` (:func:`_turning_columns`; a chained call's when
+    ``chain`` carries them), whether they are carried, a turning damping and the scratch
+    (:func:`_scratch`)."""
+    carry, MKC_in, acc_in, _ = chain
+    n = x.shape[0] // 2
+    MKC, zsrc, nz, cturn = _turning_columns(n, geo)
     acc = np.empty(n)
     carried = (carry.shape[0] >= 7 and carry[0] > 0.0 and MKC_in.shape[0] == n
                and MKC_in.shape[1] == MKC.shape[1] and acc_in.shape[0] == n)
     if carried:
         MKC = MKC_in
         acc = acc_in
-    n_terms = terms[terms.shape[0] - 1]
-    B = np.empty((n_terms, n))
-    q = x[:n].copy()
-    v = x[n:].copy()
-    qb = np.empty(n)
-    vb = np.empty(n)
-    ga = np.empty(nc)
-    ra = np.empty(nc)
-    gb = np.empty(nc)
-    rb = np.empty(nc)
-    coef = np.empty(n_terms)
-    work_flat = np.empty((DEPTH + 5) * n_terms)
-    stk = np.empty((2, DEPTH + 1))
-    ysc = np.empty(2 * n + nz)
-    roots = np.empty(nc)
-    colsum = np.empty(n)
-    qo = np.empty(n)
-    vo = np.empty(n)
-    order = np.empty(nc, dtype=np.int64)
-    order_est = np.empty(nc)
-    gF = np.empty(n)
-    gS = np.empty(n)
-    g0 = np.empty(n)
-    m = F.shape[1]
-    # turning geometry (empty for a frozen system)
-    nTC = tc_idx.shape[0]
-    turning = H1 > 1
-    E = np.zeros((H1, n_terms), dtype=np.complex128)
-    EL = np.full(H1, n_terms, dtype=np.int64)  # terms of E_h up to the first negligible one
-    Y = np.empty((2, H1, n_terms, nT))
-    Yd = np.empty((2, H1, n_terms, nT))
-    Bt = np.empty((n_terms, nT))
-    OFS = np.zeros((nTC, n_terms))
-    P = np.zeros((nTC, n_terms))
-    PD = np.zeros((nTC, n_terms))
-    FT = np.zeros((nTC, n_terms))
-    kt = np.empty(nTC)
-    ct = np.empty(nTC)
-    closed = np.empty(nTC, dtype=np.bool_)
-    grid_loads = False  # a turning load of the force grid over the current output step
-    VA = np.zeros((H1, n), dtype=np.complex128)
-    VS = np.zeros((H1, n), dtype=np.complex128)
-    GV = np.zeros((H1, n), dtype=np.complex128)
-    # loads on their own knots (TL, FL) and harmonic loads (HX, HNU)
-    nk = TL.shape[0]
-    il = 0  # the knot interval [TL[il], TL[il + 1]] holding t
-    knots_due = nk > 0  # its terms to compute
-    tL0 = 0.0
-    gLa = np.zeros(n)
-    gLs = np.zeros(n)
-    VLa = np.zeros((H1, n), dtype=np.complex128)
-    VLs = np.zeros((H1, n), dtype=np.complex128)
-    VST = np.zeros((H1, n), dtype=np.complex128)
-    loads_knots = False
-    gR = np.empty(n)  # the force's rate over the piece (grid and knots)
-    harmonic = HX.shape[0] > 0
-    HF = np.zeros((n_terms, n))
-    tw = TurningWork(tcols, urows, TW, TU, ysc, E, EL, Y, Yd, Bt, OFS, kt, ct, closed, P, PD, FT,
-                     GV, VST, HF, zsrc)
-    # exact peaks: scratch of _track_peaks
-    cs1 = np.empty(n)
-    csd = np.empty(n)
-    pfx = np.zeros(n_terms)
-    pfy = np.zeros(n_terms)
-    ptmp = np.zeros(n_terms)
-    pP = np.zeros(2 * n_terms)
-    pd_ = np.zeros(2 * n_terms)
-    pe_ = np.zeros(2 * n_terms)
-    pwork = np.empty((DEPTH + 5) * 2 * n_terms)
-    # exact turning points: the contacts that jumped at the current piece's start, scratch
-    jumped = np.zeros(nc, dtype=np.bool_)
-    taus = np.empty(2 * n_terms)
-    pspd = np.zeros(2 * n_terms)  # the input speed's series (load integrals)
-    prev = np.zeros(6 * n_terms + 4)  # its revolutions (level changes)
-    pxn = np.empty(16 * (2 * n_terms + 8))  # the load integrals' nodes, weights, bins
-    pwn = np.empty(16 * (2 * n_terms + 8))
-    pbn = np.empty(16 * (2 * n_terms + 8), dtype=np.int64)
-    paq = np.empty(16 * (2 * n_terms + 8))
-    n_turn = TS.shape[0]  # channels: the contact channels, then the spring channels
-    # what the tracking reads, bundled once (bundles.py)
-    con = ContactRows(s, jumped, kc, cc, off, Sparse(wptr, widx, wval), tc_idx, FT)
-    pw = PeakWork(cs1, csd, pfx, pfy, pP, ptmp)
-    sw = Search(pd_, pe_, pwork, stk)
-    tch = TurnChannels(TCH, TCW, TS)
+    return MKC, acc, carried, cturn, _scratch(x, s, sy, geo, n_terms, nz, zsrc)
+
+
+@numba.njit(cache=True, inline="always")
+def _resume(carried, carry, h_max, tscale, sy, s, bound, rho_all, MKC, acc):
+    """The loop's state at the call's start: where the last call left off (``carry``, see
+    :func:`taylor_run`), else the state matrices of contact state ``s`` and its piece limit.
+    Returns ``(toggled, dense, pending, survived, h_max, tscale)``."""
+    if carried:
+        return (int(carry[1]), carry[2] > 0.0, carry[3] > 0.0, int(carry[4]), carry[5],
+                carry[6])
+    MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU = sy
+    _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+    pending = False
+    if bound[1]:
+        h_max, tscale, pending = _piece_limit(s, bound, rho_all, h_max, True)
+    return 0, False, pending, 0, h_max, tscale
+
+
+@numba.njit(cache=True, inline="always")
+def _tracked(peaks, chans, turns):
+    """The tracking's bundles (:func:`_track_peaks`, :func:`_track_turns`) of the arguments,
+    borrowed: ``Peaks``, ``Channels``, ``TurnChannels``."""
+    track, EP, PB, pbin, PC, PM, PN, t_call = peaks
+    (sptr, sidx, sval), ch_k, ch_c, ch_p = chans
     pk = Peaks(track, EP, PB, pbin, PC, PM, PN, t_call)
     chn = Channels(Sparse(sptr, sidx, sval), ch_k, ch_c, ch_p)
-    tkw = TurnWork(pfx, pfy, pP, ptmp, taus, pspd, prev, pxn, pwn, pbn, paq)
-    # from here on the per-piece work reads its arrays without reference counts (borrow.py):
-    # the names rebound to borrowed views, the arrays kept by ``owners`` (named at both
-    # returns: alive); MKC and acc are returned, so the loop reads their views MKCb, accb
-    owners = (B, tw, con, pw, sw, tch, pk, chn, tkw,
-              (q, v, qb, vb, ga, ra, gb, rb, coef, work_flat, stk, ysc, roots, colsum, qo, vo),
-              (order, order_est, gF, gS, g0, gR, HF, jumped, E, EL, P, OFS, VA, VS, GV),
-              (gLa, gLs, VLa, VLs, VST))
-    (B, tw, con, pw, sw, tch, pk, chn, tkw,
-     (q, v, qb, vb, ga, ra, gb, rb, coef, work_flat, stk, ysc, roots, colsum, qo, vo),
-     (order, order_est, gF, gS, g0, gR, HF, jumped, E, EL, P, OFS, VA, VS, GV),
-     (gLa, gLs, VLa, VLs, VST)) = borrowed(owners)
+    return borrowed((pk, chn, TurnChannels(turns[0], turns[1], turns[2])))
+
+
+@numba.njit(cache=True, inline="always")
+def _refresh(toggled, sy, s, MKC, acc):
+    """The state matrices rebuilt from scratch after ``REFRESH`` rank-one updates (their
+    rounding). Returns the updates since."""
+    if toggled < REFRESH:
+        return toggled
+    MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU = sy
+    _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
+    return 0
+
+
+@numba.njit(cache=True, inline="always")
+def _leave(x, st, sched_pos, ip):
+    """The call's end state and schedule entry, for the caller (and the next call)."""
+    n = st.q.shape[0]
+    x[:n] = st.q
+    x[n:] = st.v
+    sched_pos[0] = ip
+
+
+@numba.njit(cache=True, inline="always")
+def _keep(carry, toggled, dense, pending, survived, h_max, tscale):
+    """What a chained call reads back (:func:`_resume`), into ``carry`` (when it has room)."""
+    if carry.shape[0] >= 7:
+        kept = (1.0, float(toggled), 1.0 if dense else 0.0, 1.0 if pending else 0.0,
+                float(survived), h_max, tscale)
+        for i in range(7):
+            carry[i] = kept[i]
+
+
+@numba.njit(cache=True, inline="always")
+def _piece_length(t, remaining, h_max, dense, ip, sched_t):
+    """The next piece's length from ``t``: up to the limit ``h_max`` (a quarter of it right
+    after a quick succession of events, ``dense``: the next one is likely near, and a shorter
+    piece needs fewer terms), the output time ``remaining`` ahead (no sliver before it) and
+    the next time event ``sched_t[ip]``."""
+    hm = DENSE * h_max if dense else h_max
+    h = min(hm, remaining)
+    if h < remaining and remaining - h < 1e-3 * hm:
+        h = 0.5 * remaining  # no sliver before the output time
+    if ip < sched_t.shape[0] and sched_t[ip] < t + h:
+        h = sched_t[ip] - t  # the piece ends at the next time event
+    return h
+
+
+@numba.njit(cache=True, inline="always")
+def _piece_end(t, h, remaining, t_end, sched_t, ip, TL, il, tie):
+    """The time a piece from ``t`` ends: ``t_end`` exactly when it was the ``remaining`` time,
+    and exactly the time event or load knot that it reaches to within ``tie``."""
+    t = t_end if h == remaining else t + h
+    if ip < sched_t.shape[0] and sched_t[ip] - t < tie:
+        t = max(t, sched_t[ip])  # exactly at the time event
+    if il + 2 < TL.shape[0] and TL[il + 1] - t < tie:
+        t = max(t, TL[il + 1])  # exactly at the load knot
+    return t
+
+
+@numba.njit(cache=True, inline="always")
+def _stretch_forces(F, k, k2, span, MinvU, GT, fo):
+    """``M^-1 F`` at the stretch start (output step ``k``) and its rate (first-order hold) from
+    the stretch's ends (``k2``, ``span`` s later), once per stretch, so that the force (and the
+    solution) does not depend on the output step when the samples lie on one line; for a
+    turning system the load harmonics ``GT`` likewise. Returns whether a turning load is
+    nonzero."""
+    gF, gS, VA, VS = fo.gF, fo.gS, fo.VA, fo.VS
+    n = gF.shape[0]
+    m = F.shape[1]
+    for i in range(n):
+        a0 = 0.0
+        a1 = 0.0
+        for j in range(m):
+            a0 += MinvU[i, j] * F[k, j]
+            a1 += MinvU[i, j] * (F[k2, j] - F[k, j])
+        gF[i] = a0
+        gS[i] = a1 / span
+    loads = False
+    for hh in range(1, VA.shape[0]):
+        for i in range(n):
+            z0 = 0j
+            z1 = 0j
+            for j in range(m):
+                z0 += GT[hh, i, j] * F[k, j]
+                z1 += GT[hh, i, j] * (F[k2, j] - F[k, j])
+            VA[hh, i] = z0
+            VS[hh, i] = z1 / span
+            if z0 != 0.0 or z1 != 0.0:
+                loads = True
+    return loads
+
+
+@numba.njit(cache=True, inline="always")
+def _time_events(t, ip, sched, tie, sy, con, MKC, acc):
+    """Apply the scheduled stiffness changes due by ``t`` (within ``tie``) from ``sched``'s
+    entry ``ip`` on: a closed contact's as a rank-one update of ``MKC``, ``acc`` (its force
+    steps with the stiffness: it jumped). Returns the next entry and the updates made."""
+    sched_t, sched_e, sched_k, _ = sched
+    U, W, kc, cc, off = sy[2], sy[3], sy[7], sy[8], sy[9]
+    s, jumped = con.s, con.jumped
+    flips = 0
+    while ip < sched_t.shape[0] and sched_t[ip] <= t + tie:
+        e = sched_e[ip]
+        if s[e]:
+            _toggle(U, W, kc, cc, off, e, -1.0, MKC, acc)
+            kc[e] = sched_k[ip]
+            _toggle(U, W, kc, cc, off, e, 1.0, MKC, acc)
+            flips += 2
+            jumped[e] = True
+        else:
+            kc[e] = sched_k[ip]
+        ip += 1
+    return ip, flips
+
+
+@numba.njit(cache=True, inline="always")
+def _knot_forces(t, h, il, due, tL0, turning_loads, tie, loads, fo):
+    """The loads on their own knots ``loads.TL``: the knot interval ``il`` holding ``t``, and
+    when it moved (or ``due``) its line ``M^-1 FL`` from the knot at or before ``t`` and its
+    rate (``fo.gLa``, ``fo.gLs``; turning harmonics ``fo.VLa``, ``fo.VLs``); the piece ``h``
+    ends at the next knot. Returns ``(il, h, tL0, turning_loads)``: the interval, the piece,
+    the knot's time and whether a turning load of the knots is nonzero."""
+    TL, FL, MinvUL, GTL, HX, HNU = loads
+    gLa, gLs, VLa, VLs = fo.gLa, fo.gLs, fo.VLa, fo.VLs
+    nk = TL.shape[0]
+    n = gLa.shape[0]
+    while il + 2 < nk and TL[il + 1] <= t + tie:
+        il += 1
+        due = True
+    if due:
+        tL0 = TL[il]
+        span_l = TL[il + 1] - TL[il] if nk > 1 else 1.0
+        for i in range(n):
+            a0 = 0.0
+            a1 = 0.0
+            for j in range(FL.shape[1]):
+                a0 += MinvUL[i, j] * FL[il, j]
+                if nk > 1:
+                    a1 += MinvUL[i, j] * (FL[il + 1, j] - FL[il, j])
+            gLa[i] = a0
+            gLs[i] = a1 / span_l
+        turning_loads = False
+        for hh in range(1, VLa.shape[0]):
+            for i in range(n):
+                z0 = 0j
+                z1 = 0j
+                for j in range(FL.shape[1]):
+                    z0 += GTL[hh, i, j] * FL[il, j]
+                    if nk > 1:
+                        z1 += GTL[hh, i, j] * (FL[il + 1, j] - FL[il, j])
+                VLa[hh, i] = z0
+                VLs[hh, i] = z1 / span_l
+                if z0 != 0.0 or z1 != 0.0:
+                    turning_loads = True
+    if il + 2 < nk and t + tie < TL[il + 1] < t + h:
+        h = TL[il + 1] - t  # the piece ends at the next load knot
+    return il, h, tL0, turning_loads
+
+
+@numba.njit(cache=True, inline="always")
+def _piece_forces(t, tk, tL0, knots, acc, fo, tw, con):
+    """The force terms at the piece's start ``t`` (the stretch started at ``tk``, the knot
+    interval at ``tL0``; ``knots``: loads on their own knots): ``g0 = M^-1 (F + f_s)`` and its
+    rate ``gR``, and for a turning system the turning loads ``GV``, ``GVS`` and the turning
+    contacts' stiffness, damping and state."""
+    gF, gS, g0, gR, gLa, gLs = fo.gF, fo.gS, fo.g0, fo.gR, fo.gLa, fo.gLs
+    n = g0.shape[0]
+    for i in range(n):
+        g0[i] = acc[i] + gF[i] + gS[i] * (t - tk)
+        gR[i] = gS[i]
+    if knots:
+        for i in range(n):
+            g0[i] += gLa[i] + gLs[i] * (t - tL0)
+            gR[i] += gLs[i]
+    H1 = fo.VA.shape[0]
+    if H1 > 1:
+        VA, VS, GV, VST, VLa, VLs = fo.VA, fo.VS, fo.GV, fo.GVS, fo.VLa, fo.VLs
+        s, kc, cc, tc_idx = con.s, con.kc, con.cc, con.tc_idx
+        kt, ct, closed = tw.kt, tw.ct, tw.closed
+        for e in range(tc_idx.shape[0]):
+            kt[e] = kc[tc_idx[e]]
+            ct[e] = cc[tc_idx[e]]
+            closed[e] = s[tc_idx[e]]
+        for hh in range(H1):
+            for i in range(n):
+                GV[hh, i] = VA[hh, i] + VS[hh, i] * (t - tk)
+                VST[hh, i] = VS[hh, i]
+                if knots:
+                    GV[hh, i] += VLa[hh, i] + VLs[hh, i] * (t - tL0)
+                    VST[hh, i] += VLs[hh, i]
+
+
+@numba.njit(cache=True, inline="always")
+def _turning_offsets(t, h, nt, geo, tw):
+    """The exponential series of the piece ``[t, t + h]`` (P2), each up to its first negligible
+    term (P3), and the turning contacts' offsets ``OFS``."""
+    om, psi0, harm, TOFF = geo[0], geo[1], geo[2], geo[10]
+    E, EL, OFS = tw.E, tw.EL, tw.OFS
+    H1 = harm.shape[0]
+    psi = psi0 + om * t
+    for hh in range(H1):
+        z = 1j * harm[hh] * om * h
+        E[hh, 0] = complex(math.cos(harm[hh] * psi), math.sin(harm[hh] * psi))
+        EL[hh] = nt
+        for jj in range(1, nt):
+            if EL[hh] < nt:
+                E[hh, jj] = 0j
+                continue
+            E[hh, jj] = E[hh, jj - 1] * z / jj
+            # |E_j| <= |z|^j / j! below E_TINY (|z| < 1: the rest smaller): the Cauchy
+            # products stop there (P3)
+            if abs(E[hh, jj]) < E_TINY and abs(z) < 1.0:
+                EL[hh] = jj + 1
+    for e in range(OFS.shape[0]):
+        for kk in range(nt):
+            a = 0.0
+            for hh in range(H1):
+                a += (TOFF[hh, e] * E[hh, kk]).real
+            OFS[e, kk] = a
+
+
+@numba.njit(cache=True, inline="always")
+def _piece_series(t, h, Bv, st, MKC, fo, tw, geo, loads, counts, cturn, turning_loads):
+    """The piece's scaled series ``Bv`` from ``(t, st.q, st.v)``, halved (the series of
+    ``h / 2``) while its tail is not negligible (a state stiffer than the bound). Returns the
+    piece's length."""
+    HX, HNU = loads[4], loads[5]
+    g0, gR, q, v, y, HF = fo.g0, fo.gR, st.q, st.v, tw.y, tw.HF  # bound once (a field read
+    # is a reference taken and dropped where it is read)
+    nt = Bv.shape[0]
+    turning = geo[2].shape[0] > 1
+    harmonic = HX.shape[0] > 0
+    while True:
+        counts[3] += nt
+        if turning:
+            _turning_offsets(t, h, nt, geo, tw)
+        # (whole arrays, the first nt terms used: contiguous, no strided views; a system that
+        # does not turn has no harmonics, its loops are empty)
+        if harmonic:
+            _harmonic_rows(HX, HNU, t, h, nt, HF)
+        if turning:
+            _coefficients(MKC, g0, gR, q, v, h, Bv, tw, cturn, turning_loads, harmonic)
+        else:
+            _coefficients_frozen(MKC, g0, gR, q, v, h, Bv, y, HF, harmonic)
+        if _converged(Bv, TAIL):
+            return h
+        counts[1] += 1
+        h *= 0.5
+
+
+@numba.njit(cache=True, inline="always")
+def _end_gaps(Bv, h, fresh, st, sy, con, tw):
+    """The state at the piece's end ``(st.qb, st.vb)`` and the gaps and their rates at both
+    ends (at the start only when not ``fresh``); a turning contact's from its series."""
+    wptr, widx, wval, off = sy[4], sy[5], sy[6], sy[9]
+    s, tc_idx = con.s, con.tc_idx
+    ga, ra, gb, rb, P = st.ga, st.ra, st.gb, st.rb, tw.P
+    _evaluate(Bv, 1.0, h, st.qb, st.vb)
+    if not fresh:
+        _gaps(wptr, widx, wval, off, s, st.q, st.v, ga, ra)
+    _gaps(wptr, widx, wval, off, s, st.qb, st.vb, gb, rb)
+    for e in range(tc_idx.shape[0]):
+        c_ = tc_idx[e]
+        sg = -1.0 if s[c_] else 1.0
+        if not fresh:
+            ga[c_] = sg * P[e, 0]
+            ra[c_] = sg * P[e, 1] / h
+        g1 = 0.0
+        d1 = 0.0
+        for kk in range(Bv.shape[0]):
+            g1 += P[e, kk]
+            d1 += kk * P[e, kk]
+        gb[c_] = sg * g1
+        rb[c_] = sg * d1 / h
+
+
+@numba.njit(cache=True, inline="always")
+def _first_crossing(Bv, h, tie, st, rw, sy, con, tw, counts):
+    """The first contact-state change on the piece, as a fraction of ``h`` (``inf``: none);
+    each contact's first root in ``rw.roots`` (``inf``: none before the first plus ``tie``).
+
+    Contacts whose gap has crossed by the end come first, the likeliest earliest crossing
+    (linear estimate) first: a certain root gives an early bound, and the others are searched
+    only up to it (often rejected at once). Every other contact's gap polynomial is bounded on
+    the piece (the start value plus the positive coefficients) and searched where that bound
+    does not exclude a crossing (rigorous whatever the piece's length)."""
+    off, wptr, widx, wval = sy[9], sy[4], sy[5], sy[6]
+    s, tc_idx, P = con.s, con.tc_idx, tw.P
+    coef, stk, roots, colsum, order, order_est = rw.coef, rw.stk, rw.roots, rw.colsum, \
+        rw.order, rw.est
+    ga, gb = st.ga, st.gb
+    nt, n = Bv.shape
+    nc = roots.shape[0]
+    # the root search's scratch, contiguous at this width (a column slice of a wider array
+    # would not vectorise)
+    work = rw.wflat[:(DEPTH + 5) * nt].reshape((DEPTH + 5, nt))
+    best = np.inf
+    n_cert = 0
+    for e in range(nc):
+        roots[e] = np.inf
+        if gb[e] > 0.0:
+            est = ga[e] / (ga[e] - gb[e]) if ga[e] < 0.0 else 0.0
+            jj = n_cert  # insertion by estimate (a handful of contacts)
+            while jj > 0 and order_est[jj - 1] > est:
+                order[jj] = order[jj - 1]
+                order_est[jj] = order_est[jj - 1]
+                jj -= 1
+            order[jj] = e
+            order_est[jj] = est
+            n_cert += 1
+    n_order = n_cert
+    for e in range(nc):
+        if gb[e] <= 0.0:
+            order[n_order] = e
+            n_order += 1
+    # each coordinate's series summed in magnitude from the second order on (k >= 2): on the
+    # piece a contact's gap is at most its start value, plus its first-order term where that
+    # rises, plus sum_j |w_j| A_j, which clears most gaps without their series ((B1) a
+    # fortiori)
+    for i in range(n):
+        colsum[i] = 0.0
+    for kk in range(2, nt):
+        for i in range(n):
+            colsum[i] += abs(Bv[kk, i])
+    for o in range(n_order):
+        e = order[o]
+        limit = min(best + tie / h, 1.0)
+        sg = -1.0 if s[e] else 1.0
+        if o >= n_cert and wptr[e + 1] > wptr[e]:
+            g0e = -off[e]
+            g1e = 0.0
+            move = 0.0
+            for jj in range(wptr[e], wptr[e + 1]):
+                col = widx[jj]
+                g0e += wval[jj] * Bv[0, col]
+                g1e += wval[jj] * Bv[1, col]
+                move += abs(wval[jj]) * colsum[col]
+            if sg * g0e + max(sg * g1e, 0.0) + move < 0.0:
+                continue  # no crossing on the piece
+        # the gap's series, scaled to [0, limit]: nonzero by nonzero of the gap row
+        # (independent sums over the terms; -5 % of the run against term by term)
+        for kk in range(nt):
+            coef[kk] = 0.0
+        for jj in range(wptr[e], wptr[e + 1]):
+            col = widx[jj]
+            wv = wval[jj]
+            for kk in range(nt):
+                coef[kk] += wv * Bv[kk, col]
+        for et in range(tc_idx.shape[0]):  # a turning contact: its gap's series (offset in it)
+            if tc_idx[et] == e:
+                for kk in range(nt):
+                    coef[kk] = P[et, kk]
+        scale = sg
+        for kk in range(nt):
+            coef[kk] *= scale
+            scale *= limit
+        coef[0] -= sg * off[e]
+        if o >= n_cert and coef[0] < 0.0:
+            ub = coef[0]
+            for kk in range(1, nt):
+                if coef[kk] > 0.0:
+                    ub += coef[kk]
+            if ub <= 0.0:
+                continue  # no crossing on [0, limit] (B1)
+        r = first_root(coef[:nt], work, stk)
+        counts[2] += 1
+        if r < np.inf:
+            roots[e] = r * limit
+            best = min(best, roots[e])
+    return best
+
+
+@numba.njit(cache=True, inline="always")
+def _rows_inside(Bv, t0, h, t1, jn, last, k_org, dt, rows, st, s):
+    """Write the output rows from ``jn`` (up to ``last``; row ``j`` at ``(j + k_org) dt``)
+    before ``t1`` off the series of the piece from ``t0``. Returns the next row."""
+    X, S = rows
+    qo, vo = st.qo, st.vo
+    while jn <= last and (jn + k_org) * dt < t1 - 1e-13 * dt:
+        _evaluate(Bv, ((jn + k_org) * dt - t0) / h, h, qo, vo)
+        _write(X, S, jn, qo, vo, s)
+        jn += 1
+    return jn
+
+
+@numba.njit(cache=True, inline="always")
+def _rows_at(t, jn, last, k_org, dt, rows, q, v, s):
+    """Write the output rows from ``jn`` (up to ``last``) at ``t`` (to rounding): the state
+    ``(q, v, s)``. Returns the next row."""
+    X, S = rows
+    while jn <= last and (jn + k_org) * dt <= t + 1e-13 * dt:
+        _write(X, S, jn, q, v, s)
+        jn += 1
+    return jn
+
+
+@numba.njit(cache=True, inline="always")
+def _accept_end(st):
+    """The piece's end state and gaps become the next piece's start."""
+    # (the fields bound once: a field read in the loop is a reference taken per iteration)
+    q, v, qb, vb, ga, ra, gb, rb = st.q, st.v, st.qb, st.vb, st.ga, st.ra, st.gb, st.rb
+    for i in range(q.shape[0]):
+        q[i] = qb[i]
+        v[i] = vb[i]
+    for e in range(ga.shape[0]):
+        ga[e] = gb[e]
+        ra[e] = rb[e]
+
+
+@numba.njit(cache=True)
+def _grown(EV, n_ev, room):
+    """The event rows ``EV[:n_ev]`` in a buffer with at least ``room`` rows more."""
+    grown = np.empty((max(2 * EV.shape[0], n_ev + room + 64), EV.shape[1]))
+    grown[:n_ev] = EV[:n_ev]
+    return grown
+
+
+@numba.njit(cache=True, inline="always")
+def _switch(piece, nt, log, rw, st, sy, con, tw, pk, sw, counts, mat):
+    """Switch the contacts whose first root on the piece ``(t, h, best, tol)`` (``nt`` terms)
+    lies within ``tol`` of the first (``t``: the event's time, the state ``st.q``, ``st.v``
+    there), each logged as a row of ``log = (EV, n_ev)`` from ``n_ev`` (time, contact, before,
+    after, rate, force, and on a row that opens a contact the peak force of the episode it
+    ends and its time, else NaN) and applied to the state matrices ``mat = (MKC, acc)``.
+    Returns ``(n_ev, switched, last)``: the next row, the contacts switched, the last one."""
+    t, h, best, tol = piece
+    EV, n_ev = log
+    MKC, acc = mat
+    U, W, kc, cc, off = sy[2], sy[3], sy[7], sy[8], sy[9]
+    s, jumped, tc_idx = con.s, con.jumped, con.tc_idx
+    P, PD, roots, q, v = tw.P, tw.PD, rw.roots, st.q, st.v
+    track, EP, t_call = pk[0], pk[1], pk[7]
+    switched = 0
+    last = -1
+    for e in range(roots.shape[0]):
+        if roots[e] <= best + tol:
+            before = s[e]
+            s[e] = not before
+            p = -off[e]
+            rr = 0.0
+            for i in range(q.shape[0]):
+                p += W[e, i] * q[i]
+                rr += W[e, i] * v[i]
+            wv = rr
+            for et in range(tc_idx.shape[0]):  # a turning contact: its series at the event
+                if tc_idx[et] == e:
+                    p, rr = _value_slope(P[et, :nt], best)
+                    rr /= h
+                    wv = _hpoly(PD[et, :nt], best) / h
+            force = kc[e] * max(p, 0.0) + cc[e] * wv if s[e] else 0.0
+            EV[n_ev, 0] = t
+            EV[n_ev, 1] = e
+            EV[n_ev, 2] = 1.0 if before else 0.0
+            EV[n_ev, 3] = 1.0 if s[e] else 0.0
+            EV[n_ev, 4] = rr
+            EV[n_ev, 5] = force
+            EV[n_ev, 6] = np.nan
+            EV[n_ev, 7] = np.nan
+            if track:
+                if before:  # an episode ends: its peak on the row that ends it
+                    resolve_peak(e, e, False, pk, sw, counts)
+                    EV[n_ev, 6] = EP[e, 0]
+                    EV[n_ev, 7] = EP[e, 1]
+                    EP[e, 0] = -np.inf
+                    EP[e, 1] = np.nan
+                else:  # one begins, at the force it closes with
+                    EP[e, 0] = force
+                    EP[e, 1] = t_call + t
+            n_ev += 1
+            switched += 1
+            last = e
+            _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKC, acc)
+            jumped[e] = True
+    return n_ev, switched, last
+
+
+@numba.njit(cache=True, inline="always")
+def _piece_limit(s, bound, rho_all, h_all, compute):
+    """The piece limit and term scale in contact state ``s`` from its own spectral bound
+    (:func:`_state_rho`); with ``compute`` false a state not met before runs on the bound over
+    every state ``rho_all`` until one of its pieces ends without an event (most states of a
+    rattle or a double-contact transient live shorter than a piece: their eigenproblem would
+    cost more than the longer pieces save). Returns ``(h_max, tscale, pending)``."""
+    reach, per_state, Ksym, Wl, km, cb, kappa, keys, vals = bound
+    rs = _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, keys, vals, compute)
+    pending = rs < 0.0
+    if pending:
+        rs = rho_all
+    h_max = reach / rs if rs > 0.0 else h_all
+    return h_max, TERM_BINS * rs / reach, pending
+
+
+@numba.njit(cache=True)
+def taylor_run(sy, call, out, sched, geo, bound, loads, peaks, chans, turns, chain):
+    """Propagate output steps ``call.k0 .. call.n_steps - 1`` from state ``call.x`` in contact
+    state ``call.s`` (the arguments: the bundles of :mod:`gearmodal.integrate.bundles`).
+
+    ``call.F`` (n_steps + 1, m) is the generalised force at the output times in the basis of
+    ``sy.MinvU`` (linear in between); rows ``X[k + 1]``, ``S[k + 1]`` are written after each
+    step and every contact-state change appended to ``out.EV`` from row ``out.n_ev``
+    (:func:`_switch`). Returns ``(status, k, n_ev, contact, EV, TP, ntp, MKC, acc)``: status
+    0 = done; 2 = more than ``max_events`` changes inside step ``k``, the last at ``contact``;
+    ``EV`` and ``TP`` the event and turning-point rows (larger arrays than the ones passed if
+    they ran full), ``MKC``, ``acc`` the state matrices (a chained call's carry).
+    ``out.counts`` (int64, 7) accumulates the pieces summed, the pieces halved, the gap
+    polynomials searched, the Taylor rows computed and the peak work (:func:`_track_peaks`).
+    ``call.tie`` (s): crossings this close are switched together, time events this close to a
+    piece's end are applied there (nothing that moves the solution depends on ``dt``, which
+    only places the output rows). The scheduled stiffness changes ``sched`` end a piece at
+    their time (:func:`_time_events`), as the knots of ``loads`` do (:func:`_knot_forces`);
+    harmonic loads and turning geometry ``geo`` are summed into every piece's series
+    (:func:`_piece_series`); exact peaks and turning points of the contacts and the spring
+    channels ``chans`` are tracked on every piece (``peaks.track``; times absolute,
+    ``peaks.t_call`` this call's start).
+
+    A run advanced over several calls (:class:`~gearmodal.integrate.stepper.Stepper`): row
+    ``j`` is at time ``(j + call.k_org) dt`` and every time is from the run's start;
+    ``chain.carry`` holds what the last call left (``carry[0] > 0``: ``chain.MKC``,
+    ``chain.acc`` are its state matrices, then its refresh count, dense flag, lazy-bound flag
+    and count, piece limit and term scale) and is written at the end, so that the calls walk
+    the pieces one call would; ``chain.t_span`` (2,), when given: the call's start and end
+    times (the last row is the end state).
+    """
+    # the arguments the caller keeps through the call, borrowed (no reference counts:
+    # borrow.py); not those returned (EV, TP) or carried (MKC_in, acc_in)
+    sy, sched, geo, bound, loads = borrowed((sy, sched, geo, bound, loads))
+    W, MinvU = sy[3], sy[10]
+    F, x, s, k0, n_steps, k_org, dt, h_max, terms, tscale, tie, max_events = borrowed(call)
+    X, S, EV, n_ev, counts = out
+    rows, counts = borrowed(((X, S), counts))
+    sched_t, sched_pos, TL, GT = sched[0], sched[3], loads[0], geo[12]
+    pk, chn, tch = _tracked(peaks, chans, turns)
+    track, t_call, TP, ntp = peaks[0], peaks[7], turns[3], turns[4]
+    n_turn = turns[2].shape[0]  # channels: the contact channels, then the spring channels
+    carry, t_span = borrowed((chain[0], chain[3]))
+    # the kernel's own arrays, held by ``owners`` (named at both returns: alive) and read as
+    # borrowed views; MKC and acc are returned, so the loop reads their views
+    MKC, acc, carried, cturn, owners = _setup(x, s, sy, geo, terms[terms.shape[0] - 1], chain)
+    B, st, fo, rw, tw, con, pw, sw, tkw = borrowed(owners)
     MKCb, accb = borrowed((MKC, acc))
-    toggled = 0
-    dense = False
-    cap = EV.shape[0]
-    rho_all = tscale * reach / TERM_BINS  # the bound over every state
+    rho_all = tscale * bound[0] / TERM_BINS  # the bound over every state
     h_all = h_max
-    pending = False
-    survived = 0
-    if carried:  # where the last call left off
-        toggled = int(carry[1])
-        dense = carry[2] > 0.0
-        pending = carry[3] > 0.0
-        survived = int(carry[4])
-        h_max = carry[5]
-        tscale = carry[6]
-    else:
-        _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKCb, accb)
-        if per_state:
-            rs = _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, rho_keys, rho_vals)
-            h_max = reach / rs if rs > 0.0 else h_all
-            tscale = TERM_BINS * rs / reach
+    toggled, dense, pending, survived, h_max, tscale = _resume(
+        carried, carry, h_max, tscale, sy, s, bound, rho_all, MKCb, accb)
     k = k0
     ip = sched_pos[0]
-    n_sched = sched_t.shape[0]
-    # given times: the call's last row is its end state, whatever dt's rounding of its time
-    spanned = t_span.shape[0] == 2
-    j_in = n_steps - 1 if spanned else n_steps  # the last row read off a piece's series
+    il, knots_due, tL0, loads_knots = 0, TL.shape[0] > 0, 0.0, False  # the knot interval
+    spanned = t_span.shape[0] == 2  # given times: the call's last row is its end state
+    last_row = n_steps - 1 if spanned else n_steps  # the last row read off a piece's series
     while k < n_steps:
         # the output steps from k on whose forces lie on one line: one stretch of pieces (the
         # force has no kink inside it), outputs read off the pieces' series
         k2 = _stretch(F, k, n_steps)
         tk = t_span[0] if (spanned and k == 0) else (k + k_org) * dt
         t_end = t_span[1] if (spanned and k2 == n_steps) else (k2 + k_org) * dt
-        jn = k + 1  # the next output time to write
-        # M^-1 F at the stretch start and its rate (first-order hold), once per stretch: the
-        # rate from the stretch's ends, so that the force (and the solution) does not depend
-        # on the output step when the samples lie on one line
-        span = (k2 - k) * dt
-        for i in range(n):
-            a0 = 0.0
-            a1 = 0.0
-            for j in range(m):
-                a0 += MinvU[i, j] * F[k, j]
-                a1 += MinvU[i, j] * (F[k2, j] - F[k, j])
-            gF[i] = a0
-            gS[i] = a1 / span
-        if turning:  # the turning load harmonics at the stretch start and their rates
-            grid_loads = False
-            for hh in range(1, H1):
-                for i in range(n):
-                    z0 = 0j
-                    z1 = 0j
-                    for j in range(m):
-                        z0 += GT[hh, i, j] * F[k, j]
-                        z1 += GT[hh, i, j] * (F[k2, j] - F[k, j])
-                    VA[hh, i] = z0
-                    VS[hh, i] = z1 / span
-                    if z0 != 0.0 or z1 != 0.0:
-                        grid_loads = True
+        jn = k + 1  # the next output row, up to kl
+        kl = min(k2, last_row)
+        grid_loads = _stretch_forces(F, k, k2, (k2 - k) * dt, MinvU, GT, fo)
         t = tk
-        count = 0
-        fresh = False  # ga, ra hold the gaps at (t, q, v) in state s
+        count = 0  # the contact changes since the last output row
+        fresh = False  # st.ga, st.ra hold the gaps at (t, q, v) in state s
         while True:
-            # scheduled stiffness changes due by now (time events)
-            while ip < n_sched and sched_t[ip] <= t + simultaneous:
-                e = sched_e[ip]
-                if s[e]:
-                    _toggle(U, W, kc, cc, off, e, -1.0, MKCb, accb)
-                    kc[e] = sched_k[ip]
-                    _toggle(U, W, kc, cc, off, e, 1.0, MKCb, accb)
-                    toggled += 2
-                    jumped[e] = True  # its force steps with the stiffness
-                else:
-                    kc[e] = sched_k[ip]
-                ip += 1
+            if ip < sched_t.shape[0] and sched_t[ip] <= t + tie:  # a time event due
+                ip, flips = _time_events(t, ip, sched, tie, sy, con, MKCb, accb)
+                toggled += flips
             remaining = t_end - t
-            if remaining <= simultaneous:
+            if remaining <= tie:
                 break
-            # right after a quick succession of events the next one is likely near: a piece
-            # of a quarter of the reach needs fewer terms (ends of pieces cost nothing)
-            hm = DENSE * h_max if dense else h_max
-            h = min(hm, remaining)
-            if h < remaining and remaining - h < 1e-3 * hm:
-                h = 0.5 * remaining  # no sliver before the output time
-            if ip < n_sched and sched_t[ip] < t + h:
-                h = sched_t[ip] - t  # the piece ends at the next time event
-            if nk > 0:
-                # the load knots passed by now: the force's line from the knot at or before t
-                while il + 2 < nk and TL[il + 1] <= t + simultaneous:
-                    il += 1
-                    knots_due = True
-                if knots_due:
-                    tL0 = TL[il]
-                    span_l = TL[il + 1] - TL[il] if nk > 1 else 1.0
-                    for i in range(n):
-                        a0 = 0.0
-                        a1 = 0.0
-                        for j in range(FL.shape[1]):
-                            a0 += MinvUL[i, j] * FL[il, j]
-                            if nk > 1:
-                                a1 += MinvUL[i, j] * (FL[il + 1, j] - FL[il, j])
-                        gLa[i] = a0
-                        gLs[i] = a1 / span_l
-                    loads_knots = False
-                    for hh in range(1, H1):
-                        for i in range(n):
-                            z0 = 0j
-                            z1 = 0j
-                            for j in range(FL.shape[1]):
-                                z0 += GTL[hh, i, j] * FL[il, j]
-                                if nk > 1:
-                                    z1 += GTL[hh, i, j] * (FL[il + 1, j] - FL[il, j])
-                            VLa[hh, i] = z0
-                            VLs[hh, i] = z1 / span_l
-                            if z0 != 0.0 or z1 != 0.0:
-                                loads_knots = True
-                    knots_due = False
-                if il + 2 < nk and t + simultaneous < TL[il + 1] < t + h:
-                    h = TL[il + 1] - t  # the piece ends at the next load knot
-            # as many terms as the piece's own reach rho h needs (a short piece before an
-            # output time or after an event needs fewer)
-            j = int(math.ceil(h * tscale))
-            nt = terms[min(max(j, 0), terms.shape[0] - 1)]
+            h = _piece_length(t, remaining, h_max, dense, ip, sched_t)
+            if TL.shape[0] > 0:
+                il, h, tL0, loads_knots = _knot_forces(t, h, il, knots_due, tL0, loads_knots,
+                                                       tie, loads, fo)
+                knots_due = False
+            # as many terms as the piece's own reach rho h needs
+            nt = terms[min(max(int(math.ceil(h * tscale)), 0), terms.shape[0] - 1)]
             Bv = B[:nt]
-            # the root search's scratch, contiguous at this width (a column slice of a wider
-            # array would not vectorise)
-            work = work_flat[:(DEPTH + 5) * nt].reshape((DEPTH + 5, nt))
-            for i in range(n):
-                g0[i] = acc[i] + gF[i] + gS[i] * (t - tk)
-                gR[i] = gS[i]
-            if nk > 0:
-                for i in range(n):
-                    g0[i] += gLa[i] + gLs[i] * (t - tL0)
-                    gR[i] += gLs[i]
-            if turning:
-                for e in range(nTC):
-                    kt[e] = kc[tc_idx[e]]
-                    ct[e] = cc[tc_idx[e]]
-                    closed[e] = s[tc_idx[e]]
-                for hh in range(H1):
-                    for i in range(n):
-                        GV[hh, i] = VA[hh, i] + VS[hh, i] * (t - tk)
-                        VST[hh, i] = VS[hh, i]
-                        if nk > 0:
-                            GV[hh, i] += VLa[hh, i] + VLs[hh, i] * (t - tL0)
-                            VST[hh, i] += VLs[hh, i]
+            _piece_forces(t, tk, tL0, TL.shape[0] > 0, accb, fo, tw, con)
             counts[0] += 1
-            while True:
-                counts[3] += nt
-                if turning:
-                    # the exponential series of the piece (P2) and the turning offsets
-                    psi = psi0 + om * t
-                    for hh in range(H1):
-                        z = 1j * harm[hh] * om * h
-                        E[hh, 0] = complex(math.cos(harm[hh] * psi), math.sin(harm[hh] * psi))
-                        EL[hh] = nt
-                        for jj in range(1, nt):
-                            if EL[hh] < nt:
-                                E[hh, jj] = 0j
-                                continue
-                            E[hh, jj] = E[hh, jj - 1] * z / jj
-                            # |E_j| <= |z|^j / j! below E_TINY (|z| < 1: the rest smaller):
-                            # the Cauchy products stop there (P3)
-                            if abs(E[hh, jj]) < E_TINY and abs(z) < 1.0:
-                                EL[hh] = jj + 1
-                    for e in range(nTC):
-                        for kk in range(nt):
-                            a = 0.0
-                            for hh in range(H1):
-                                a += (TOFF[hh, e] * E[hh, kk]).real
-                            OFS[e, kk] = a
-                # (whole arrays, the first nt terms used: contiguous, no strided views; a
-                # system that does not turn has no harmonics, its loops are empty)
-                if harmonic:
-                    _harmonic_rows(HX, HNU, t, h, nt, HF)
-                if turning:
-                    # (a name, not an expression, in the call: numba's bytecode limit)
-                    turning_loads = grid_loads or loads_knots
-                    _coefficients(MKCb, g0, gR, q, v, h, Bv, tw, cturn, turning_loads, harmonic)
-                else:
-                    _coefficients_frozen(MKCb, g0, gR, q, v, h, Bv, ysc, HF, harmonic)
-                if _converged(Bv, TAIL):
-                    break
-                counts[1] += 1
-                # a state stiffer than the bound: halve the piece (the series of h / 2)
-                h *= 0.5
-            _evaluate(Bv, 1.0, h, qb, vb)
-            if not fresh:
-                _gaps(wptr, widx, wval, off, s, q, v, ga, ra)
-            _gaps(wptr, widx, wval, off, s, qb, vb, gb, rb)
-            for e in range(nTC):  # turning contacts: their gaps' series
-                c_ = tc_idx[e]
-                sg = -1.0 if s[c_] else 1.0
-                if not fresh:
-                    ga[c_] = sg * P[e, 0]
-                    ra[c_] = sg * P[e, 1] / h
-                g1 = 0.0
-                d1 = 0.0
-                for kk in range(nt):
-                    g1 += P[e, kk]
-                    d1 += kk * P[e, kk]
-                gb[c_] = sg * g1
-                rb[c_] = sg * d1 / h
-            # contacts whose gap has crossed by the end first, the likeliest earliest crossing
-            # (linear estimate) first: a certain root gives an early bound, and the others are
-            # searched only up to it (often rejected at once); then those flagged as possible
-            # brief contacts, up to the bound
-            best = np.inf
-            n_cert = 0
-            for e in range(nc):
-                roots[e] = np.inf
-                if gb[e] > 0.0:
-                    est = ga[e] / (ga[e] - gb[e]) if ga[e] < 0.0 else 0.0
-                    jj = n_cert  # insertion by estimate (a handful of contacts)
-                    while jj > 0 and order_est[jj - 1] > est:
-                        order[jj] = order[jj - 1]
-                        order_est[jj] = order_est[jj - 1]
-                        jj -= 1
-                    order[jj] = e
-                    order_est[jj] = est
-                    n_cert += 1
-            # then every other contact: its gap polynomial is bounded on the piece below
-            # (the start value plus the positive coefficients) and searched where that bound
-            # does not exclude a crossing (rigorous whatever the piece's length)
-            n_order = n_cert
-            for e in range(nc):
-                if gb[e] <= 0.0:
-                    order[n_order] = e
-                    n_order += 1
-            # each coordinate's series summed in magnitude from the second order on (k >= 2):
-            # on the piece a contact's gap is at most its start value, plus its first-order
-            # term where that rises, plus sum_j |w_j| A_j, which clears most gaps without
-            # their series ((B1) a fortiori)
-            for i in range(n):
-                colsum[i] = 0.0
-            for kk in range(2, nt):
-                for i in range(n):
-                    colsum[i] += abs(Bv[kk, i])
-            for o in range(n_order):
-                e = order[o]
-                limit = min(best + simultaneous / h, 1.0)
-                sg = -1.0 if s[e] else 1.0
-                if o >= n_cert and wptr[e + 1] > wptr[e]:
-                    g0e = -off[e]
-                    g1e = 0.0
-                    move = 0.0
-                    for jj in range(wptr[e], wptr[e + 1]):
-                        col = widx[jj]
-                        g0e += wval[jj] * Bv[0, col]
-                        g1e += wval[jj] * Bv[1, col]
-                        move += abs(wval[jj]) * colsum[col]
-                    if sg * g0e + max(sg * g1e, 0.0) + move < 0.0:
-                        continue  # no crossing on the piece
-                # the gap's series, scaled to [0, limit]: nonzero by nonzero of the gap row
-                # (independent sums over the terms; -5 % of the run against term by term)
-                for kk in range(nt):
-                    coef[kk] = 0.0
-                for jj in range(wptr[e], wptr[e + 1]):
-                    col = widx[jj]
-                    wv = wval[jj]
-                    for kk in range(nt):
-                        coef[kk] += wv * Bv[kk, col]
-                for et in range(nTC):  # a turning contact: its gap's series (offset in it)
-                    if tc_idx[et] == e:
-                        for kk in range(nt):
-                            coef[kk] = P[et, kk]
-                scale = sg
-                for kk in range(nt):
-                    coef[kk] *= scale
-                    scale *= limit
-                coef[0] -= sg * off[e]
-                if o >= n_cert and coef[0] < 0.0:
-                    ub = coef[0]
-                    for kk in range(1, nt):
-                        if coef[kk] > 0.0:
-                            ub += coef[kk]
-                    if ub <= 0.0:
-                        continue  # no crossing on [0, limit] (B1)
-                r = first_root(coef[:nt], work, stk)
-                counts[2] += 1
-                if r < np.inf:
-                    roots[e] = r * limit
-                    best = min(best, roots[e])
-            if best == np.inf:
-                if track:
-                    _track_peaks(Bv, nt, (t_call + t, h, 1.0), con, chn, pk, pw, sw, counts)
-                if track and n_turn:
-                    TP, ntp = _track_turns(Bv, nt, (t_call + t, h, 1.0), con, chn, tch, TP, ntp,
-                                           tkw, sw, PB, pbin)
-                    jumped[:] = False
+            turning_loads = grid_loads or loads_knots
+            h = _piece_series(t, h, Bv, st, MKCb, fo, tw, geo, loads, counts, cturn,
+                              turning_loads)
+            _end_gaps(Bv, h, fresh, st, sy, con, tw)
+            best = _first_crossing(Bv, h, tie, st, rw, sy, con, tw, counts)
+            if track:  # exact peaks and turning points up to the first event
+                frac = 1.0 if best == np.inf else best
+                piece = (t_call + t, h, frac)
+                _track_peaks(Bv, nt, piece, con, chn, pk, pw, sw, counts)
+                if n_turn:
+                    TP, ntp = _track_turns(Bv, nt, piece, con, chn, tch, TP, ntp, tkw, sw,
+                                           pk.PB, pk.pbin)
+                    con.jumped[:] = False
+            if best == np.inf:  # no event: the piece's end is the next one's start
                 t_old = t
-                t = t_end if h == remaining else t + h
-                if ip < n_sched and sched_t[ip] - t < simultaneous:
-                    t = max(t, sched_t[ip])  # exactly at the time event
-                if il + 2 < nk and TL[il + 1] - t < simultaneous:
-                    t = max(t, TL[il + 1])  # exactly at the load knot
+                t = _piece_end(t, h, remaining, t_end, sched_t, ip, TL, il, tie)
                 # the output times this piece passed: from its series (its end: the end state)
-                while jn <= k2 and jn <= j_in and (jn + k_org) * dt < t - 1e-13 * dt:
-                    _evaluate(Bv, ((jn + k_org) * dt - t_old) / h, h, qo, vo)
-                    _write(X, S, jn, qo, vo, s)
-                    jn += 1
-                    count = 0
-                if jn <= k2 and jn <= j_in and (jn + k_org) * dt <= t + 1e-13 * dt:
-                    _write(X, S, jn, qb, vb, s)
-                    jn += 1
-                    count = 0
-                for i in range(n):
-                    q[i] = qb[i]
-                    v[i] = vb[i]
-                for e in range(nc):
-                    ga[e] = gb[e]
-                    ra[e] = rb[e]
-                fresh = True
-                dense = False
+                j0 = jn
+                jn = _rows_inside(Bv, t_old, h, t, jn, kl, k_org, dt, rows, st, s)
+                jn = _rows_at(t, jn, kl, k_org, dt, rows, st.qb, st.vb, s)
+                count = 0 if jn > j0 else count
+                _accept_end(st)
+                fresh, dense = True, False
                 survived += 1
                 if pending and survived >= LAZY:  # a lasting state: its own bound from now on
-                    rs = _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, rho_keys, rho_vals)
-                    h_max = reach / rs if rs > 0.0 else h_all
-                    tscale = TERM_BINS * rs / reach
-                    pending = False
+                    h_max, tscale, pending = _piece_limit(s, bound, rho_all, h_all, True)
                 continue
+            # an event at t + best h: the rows before it, then the switched contacts
             t_ev = t + best * h
-            if track:
-                _track_peaks(Bv, nt, (t_call + t, h, best), con, chn, pk, pw, sw, counts)
-            if track and n_turn:
-                TP, ntp = _track_turns(Bv, nt, (t_call + t, h, best), con, chn, tch, TP, ntp,
-                                       tkw, sw, PB, pbin)
-                jumped[:] = False
-            while jn <= k2 and jn <= j_in and (jn + k_org) * dt < t_ev - 1e-13 * dt:
-                _evaluate(Bv, ((jn + k_org) * dt - t) / h, h, qo, vo)
-                _write(X, S, jn, qo, vo, s)
-                jn += 1
-                count = 0
-            _evaluate(Bv, best, h, q, v)
+            j0 = jn
+            jn = _rows_inside(Bv, t, h, t_ev, jn, kl, k_org, dt, rows, st, s)
+            count = 0 if jn > j0 else count
+            _evaluate(Bv, best, h, st.q, st.v)
             fresh = False
             dense = best * h < DENSE * h_max
             t = t_ev
-            tol = simultaneous / h
-            last = -1
-            if n_ev + nc > cap:
+            if n_ev + W.shape[0] > EV.shape[0]:
                 # the event buffer is full: a larger one, here (ending the stretch at an output
                 # time for the caller to grow it would make the pieces depend on dt)
-                grown = np.empty((max(2 * cap, n_ev + nc + 64), EV.shape[1]))
-                grown[:n_ev] = EV[:n_ev]
-                EV = grown
-                cap = EV.shape[0]
-            for e in range(nc):
-                if roots[e] <= best + tol:
-                    before = s[e]
-                    s[e] = not before
-                    p = -off[e]
-                    rr = 0.0
-                    for i in range(n):
-                        p += W[e, i] * q[i]
-                        rr += W[e, i] * v[i]
-                    wv = rr
-                    for et in range(nTC):  # a turning contact: its series at the event
-                        if tc_idx[et] == e:
-                            p, rr = _value_slope(P[et, :nt], best)
-                            rr /= h
-                            wv = _hpoly(PD[et, :nt], best) / h
-                    force = kc[e] * max(p, 0.0) + cc[e] * wv if s[e] else 0.0
-                    EV[n_ev, 0] = t
-                    EV[n_ev, 1] = e
-                    EV[n_ev, 2] = 1.0 if before else 0.0
-                    EV[n_ev, 3] = 1.0 if s[e] else 0.0
-                    EV[n_ev, 4] = rr
-                    EV[n_ev, 5] = force
-                    EV[n_ev, 6] = np.nan
-                    EV[n_ev, 7] = np.nan
-                    if track:
-                        if before:  # an episode ends: its peak on the row that ends it
-                            resolve_peak(e, e, False, pk, sw, counts)
-                            EV[n_ev, 6] = EP[e, 0]
-                            EV[n_ev, 7] = EP[e, 1]
-                            EP[e, 0] = -np.inf
-                            EP[e, 1] = np.nan
-                        else:  # one begins, at the force it closes with
-                            EP[e, 0] = force
-                            EP[e, 1] = t_call + t
-                    n_ev += 1
-                    count += 1
-                    last = e
-                    _toggle(U, W, kc, cc, off, e, 1.0 if s[e] else -1.0, MKCb, accb)
-                    toggled += 1
-                    jumped[e] = True
-            if per_state:
-                # a state met before: its bound from the table; a new one runs on the bound
-                # over every state until one of its pieces ends without an event (most states
-                # of a rattle or a double-contact transient live shorter than a piece: their
-                # eigenproblem would cost more than the longer pieces save)
-                rs = _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, rho_keys, rho_vals,
-                                False)
-                pending = rs < 0.0
+                EV = _grown(EV, n_ev, W.shape[0])
+            n_ev, switched, last = _switch((t, h, best, tie / h), nt, (EV, n_ev), rw, st, sy,
+                                           con, tw, pk, sw, counts, (MKCb, accb))
+            count += switched
+            toggled += switched
+            if bound[1]:
+                h_max, tscale, pending = _piece_limit(s, bound, rho_all, h_all, False)
                 survived = 0
-                if pending:
-                    rs = rho_all
-                h_max = reach / rs if rs > 0.0 else h_all
-                tscale = TERM_BINS * rs / reach
             if count > max_events:
-                x[:n] = q
-                x[n:] = v
-                sched_pos[0] = ip
+                _leave(x, st, sched_pos, ip)
                 alive(owners)
                 return 2, jn - 1, n_ev, last, EV, TP, ntp, MKC, acc
-            if toggled >= REFRESH:  # rounding of the updates, rebuilt from scratch
-                _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKCb, accb)
-                toggled = 0
-            # an output time at the event: the state after it
-            while jn <= k2 and jn <= j_in and (jn + k_org) * dt <= t + 1e-13 * dt:
-                _write(X, S, jn, q, v, s)
-                jn += 1
-                count = 0
-        if toggled >= REFRESH:
-            _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKCb, accb)
-            toggled = 0
-        while jn <= k2:  # (none left: the last piece ends at the stretch's end)
-            _write(X, S, jn, q, v, s)
-            jn += 1
+            toggled = _refresh(toggled, sy, s, MKCb, accb)
+            j0 = jn  # an output time at the event: the state after it
+            jn = _rows_at(t, jn, kl, k_org, dt, rows, st.q, st.v, s)
+            count = 0 if jn > j0 else count
+        toggled = _refresh(toggled, sy, s, MKCb, accb)
+        jn = _rows_at(np.inf, jn, k2, k_org, dt, rows, st.q, st.v, s)  # none left, normally
         k = k2
-    x[:n] = q
-    x[n:] = v
-    sched_pos[0] = ip
-    if carry.shape[0] >= 7:
-        carry[0] = 1.0
-        carry[1] = toggled
-        carry[2] = 1.0 if dense else 0.0
-        carry[3] = 1.0 if pending else 0.0
-        carry[4] = survived
-        carry[5] = h_max
-        carry[6] = tscale
+    _leave(x, st, sched_pos, ip)
+    _keep(carry, toggled, dense, pending, survived, h_max, tscale)
     alive(owners)
     return 0, k, n_ev, -1, EV, TP, ntp, MKC, acc
 
