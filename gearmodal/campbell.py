@@ -27,7 +27,7 @@ from .model.model import Model
 from .model.validate import plausible
 from .modetypes import LOOSE, QUIET, classify
 from .result_io import read_header, write_header
-from .whirl import log_decrement, rigid_undamped, translation_pairs, whirl
+from .whirl import damping_ratios, log_decrement, rigid_undamped, translation_pairs, whirl
 
 #: layout version of :meth:`CampbellResult.save` (``result.json``)
 SAVE_VERSION = 1
@@ -532,8 +532,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
         lam, phi = solve_at(i, rpm * RPM)
         absl = np.abs(lam)
         f = absl / (2 * math.pi)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            z = np.where(absl > 0, -lam.real / np.where(absl > 0, absl, 1.0), 0.0)
+        z = damping_ratios(lam)
         Mphi = _matmul(M, phi)
         norm = _re_dot(phi, Mphi)
         if prev is not None:

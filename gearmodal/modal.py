@@ -22,7 +22,7 @@ from .errors import ModelError
 from .frames import centre
 from .model.validate import plausible
 from .result_io import read_csv, read_header, write_header
-from .whirl import log_decrement, rigid_undamped, translation_pairs, whirl
+from .whirl import damping_ratios, log_decrement, rigid_undamped, translation_pairs, whirl
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 #: layout version of :meth:`ModalResult.save` (``result.json``)
@@ -510,9 +510,7 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
         shapes = N @ shapes
     absl = np.abs(lam)
     freq = absl / (2 * math.pi)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        zeta = np.where(absl > 0, -lam.real / np.where(absl > 0, absl, 1.0), 0.0)
-    zeta = np.where(np.abs(zeta) < 1e-12, 0.0, zeta)
+    zeta = damping_ratios(lam)
     big = np.argmax(np.abs(shapes), axis=0)
     shapes = shapes / shapes[big, np.arange(shapes.shape[1])]
     ke, se = energies(asm, shapes, freq, s)

@@ -39,6 +39,18 @@ def log_decrement(zeta) -> np.ndarray:
     return np.where(np.abs(z) >= 1.0, np.nan, out)
 
 
+def damping_ratios(lam) -> np.ndarray:
+    """``-Re(lambda) / |lambda|`` of eigenvalues ``lam``: 0 where ``lambda`` is 0, and where
+    the ratio is below 1e-12 in magnitude (an undamped mode's eigenvalue has a real part of
+    rounding, ~1e-16 of its magnitude), so that ``gm.modal`` and ``gm.campbell`` read an
+    undamped mode's ratio as the same 0."""
+    lam = np.asarray(lam)
+    absl = np.abs(lam)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        zeta = np.where(absl > 0, -lam.real / np.where(absl > 0, absl, 1.0), 0.0)
+    return np.where(np.abs(zeta) < 1e-12, 0.0, zeta)
+
+
 def rigid_undamped(zeta, types) -> np.ndarray:
     """``zeta`` with the damping ratio of every ``"rigid"`` mode (``types``, the same shape)
     set to 0: a rigid-body mode's eigenvalue is zero to rounding, and at speed the gyroscopic
