@@ -11,7 +11,7 @@ tuples (``tuple(bundle)``, in this order; built once per call in
 :meth:`.exact.ExactIntegrator.stacks`): numba's dispatch costs about 0.4 us more per named
 tuple than per plain one (measured on ``advance_state``, which the ``"expm"`` propagator
 calls every step: 6 % of a gear rattle's run). Inside, :func:`.taylor.taylor_run` builds the
-named ones it hands on, once per call.
+named ones it hands on once per call (:func:`.taylor._scratch`, :func:`.taylor._tracked`).
 """
 
 from __future__ import annotations

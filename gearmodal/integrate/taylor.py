@@ -175,8 +175,9 @@ def _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc):
 def _coefficients_frozen(MKC, g0, g1, q, v, h, B, y, HF, harmonic):
     """:func:`_coefficients` of a system that does not turn (no harmonics): (T1) alone. Its
     loop is the frozen part of :func:`_coefficients` written out again on purpose: a helper
-    shared per term takes and drops an atomic reference count on each of its arrays every
-    term (12-14 % of the planetary stage's event-dense run, measured), and the turning
+    shared per term took and dropped an atomic reference count on each of its arrays every
+    term (12-14 % of the planetary stage's event-dense run, measured before the kernel read
+    borrowed views; :func:`_cauchy` is such a helper now, on borrowed views), and the turning
     function called for a frozen run costs 8 % on that run (2.72 against 2.50 ms). Both are
     checked against closed forms (frozen: tests/validation/test_exactness.py; turning:
     tests/validation/test_rotating_geometry.py). ``HF`` (n_terms, n): the scaled Taylor rows
@@ -225,7 +226,9 @@ def _cauchy(k, B, h_lo, rates, tw):
     """The Cauchy products (T2) of what term ``k`` knows, into ``tw.Y`` (``b_0 .. b_k``) and,
     with ``rates``, ``tw.Yd`` (``b_1 .. b_(k+1)``), harmonics from ``h_lo``; the turning
     coordinates' row ``k + 1`` of ``B`` into ``tw.Bt``. (Inlined into :func:`_coefficients`'
-    per-term loop; its arrays are borrowed views there: no reference counts.)"""
+    per-term loop, it binds its six fields every term: references on borrowed views, calls
+    that return at once; the 600 kW turbine's gearbox, the one user, is at parity with the
+    loop written out, benchmarks/kernel_ab.py.)"""
     tcols, E, EL, Y, Yd, Bt = tw[0], tw[5], tw[6], tw[7], tw[8], tw[9]
     n_terms = B.shape[0]
     nT = tcols.shape[0]
@@ -279,7 +282,8 @@ def _coefficients(MKC, g0, g1, q, v, h, B, tw, cturn, loads, harmonic):
     real and imaginary parts in their first axis (2, H1, n_terms, nT) and ``Bt`` (n_terms, nT)
     the turning coordinates' rows of ``B``: real, contiguous sums that vectorise. ``HF`` as
     :func:`_coefficients_frozen` (the harmonic loads, their turning products included).
-    ``zsrc``: the Z columns ``MKC`` keeps, by their place in the full layout (taylor_run).
+    ``zsrc``: the Z columns ``MKC`` keeps, by their place in the full layout
+    (:func:`_turning_columns`).
     The geometry's parts, the scratch and the piece's turning inputs come in the bundle ``tw``
     (:data:`~.bundles.TurningWork`)."""
     tcols, urows, TW, TU, y, E, EL, Y, Yd, Bt, OFS, kt, ct, closed, P, PD, FT, GV, GVS, HF, \
@@ -321,7 +325,7 @@ def _coefficients(MKC, g0, g1, q, v, h, B, tw, cturn, loads, harmonic):
         if k + 2 >= n_terms:
             continue
         den = 1.0 / ((k + 1.0) * (k + 2.0))
-        # the turning rows' inputs, laid out as the columns Z of MKC (see taylor_run):
+        # the turning rows' inputs, laid out as the columns Z of MKC (_turning_columns):
         # [Re Y_h, Im Y_h] per harmonic h >= 1, then [Re Yd_h, Im Yd_h] with a turning damping
         ck = -h2 * den
         cd = -h * den
@@ -1617,8 +1621,8 @@ def _scratch(x, s, sy, geo, n_terms, nz, zsrc):
     ``B`` (n_terms, n) and the bundles of :mod:`~gearmodal.integrate.bundles` its phases read
     (``PieceState`` from the start state ``x``, ``Forcing``, ``RootWork``, ``TurningWork``,
     ``ContactRows`` of contact state ``s``, ``PeakWork``, ``Search``, ``TurnWork``)."""
-    MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU = sy
-    om, psi0, harm, tcols, krows, urows, ZK, ZC, tc_idx, TW, TOFF, TU, GT = geo
+    W, wptr, widx, wval, kc, cc, off = sy[3], sy[4], sy[5], sy[6], sy[7], sy[8], sy[9]
+    harm, tcols, urows, tc_idx, TW, TU = geo[2], geo[3], geo[5], geo[8], geo[9], geo[11]
     n = x.shape[0] // 2
     nc = W.shape[0]
     H1 = harm.shape[0]
@@ -1662,7 +1666,9 @@ def _scratch(x, s, sy, geo, n_terms, nz, zsrc):
 def _setup(x, s, sy, geo, n_terms, chain):
     """The state matrices ``MKC``, ``acc`` (:func:`_turning_columns`; a chained call's when
     ``chain`` carries them), whether they are carried, a turning damping and the scratch
-    (:func:`_scratch`)."""
+    (:func:`_scratch`). ``x``, ``s``, ``sy``, ``geo`` are borrowed (taylor_run's arguments):
+    the scratch's bundles hold views of them that own nothing, valid while the caller holds
+    its arguments, i.e. through the call; nothing here is handed back to Python."""
     carry, MKC_in, acc_in, _ = chain
     n = x.shape[0] // 2
     MKC, zsrc, nz, cturn = _turning_columns(n, geo)
@@ -1683,7 +1689,7 @@ def _resume(carried, carry, h_max, tscale, sy, s, bound, rho_all, MKC, acc):
     if carried:
         return (int(carry[1]), carry[2] > 0.0, carry[3] > 0.0, int(carry[4]), carry[5],
                 carry[6])
-    MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU = sy
+    MK0, MC0, U, W, kc, cc, off = sy[0], sy[1], sy[2], sy[3], sy[7], sy[8], sy[9]
     _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
     pending = False
     if bound[1]:
@@ -1708,7 +1714,7 @@ def _refresh(toggled, sy, s, MKC, acc):
     rounding). Returns the updates since."""
     if toggled < REFRESH:
         return toggled
-    MK0, MC0, U, W, wptr, widx, wval, kc, cc, off, MinvU = sy
+    MK0, MC0, U, W, kc, cc, off = sy[0], sy[1], sy[2], sy[3], sy[7], sy[8], sy[9]
     _state_matrices(MK0, MC0, U, W, kc, cc, off, s, MKC, acc)
     return 0
 
@@ -1822,7 +1828,7 @@ def _knot_forces(t, h, il, due, tL0, turning_loads, tie, loads, fo):
     rate (``fo.gLa``, ``fo.gLs``; turning harmonics ``fo.VLa``, ``fo.VLs``); the piece ``h``
     ends at the next knot. Returns ``(il, h, tL0, turning_loads)``: the interval, the piece,
     the knot's time and whether a turning load of the knots is nonzero."""
-    TL, FL, MinvUL, GTL, HX, HNU = loads
+    TL, FL, MinvUL, GTL = loads[0], loads[1], loads[2], loads[3]
     gLa, gLs, VLa, VLs = fo.gLa, fo.gLs, fo.VLa, fo.VLs
     nk = TL.shape[0]
     n = gLa.shape[0]
@@ -2183,7 +2189,8 @@ def _piece_limit(s, bound, rho_all, h_all, compute):
     every state ``rho_all`` until one of its pieces ends without an event (most states of a
     rattle or a double-contact transient live shorter than a piece: their eigenproblem would
     cost more than the longer pieces save). Returns ``(h_max, tscale, pending)``."""
-    reach, per_state, Ksym, Wl, km, cb, kappa, keys, vals = bound
+    reach, Ksym, Wl, km, cb, kappa = bound[0], bound[2], bound[3], bound[4], bound[5], bound[6]
+    keys, vals = bound[7], bound[8]
     rs = _state_rho(s, Ksym, Wl, km, cb, kappa, rho_all, keys, vals, compute)
     pending = rs < 0.0
     if pending:
@@ -2620,7 +2627,7 @@ class TaylorIntegrator:
         geometry); ``loads``: ``(knot_t, knot_u, harmonic_u, harmonic_nu, basis)`` added to
         ``F`` (:meth:`_loads`); ``peaks``: a :class:`~gearmodal.integrate.peaks.PeakTracker`
         the exact peaks accumulate in (times from ``t0``, the run's time at this call's
-        start, s). Events are rows of 8 (:func:`taylor_run`).
+        start, s). Events are rows of 8 (:func:`_switch`).
 
         ``k_org``: this call continues the last one from its output step ``k_org``
         (:class:`~gearmodal.integrate.stepper.Stepper`): times from the run's start (the
