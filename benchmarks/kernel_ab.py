@@ -4,7 +4,7 @@ Usage::
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/kernel_ab.py --base REV --out DIR \\
         [--pairs 300] [--turbine-pairs 20] [--cases planet,rattle,planet_peaks,turbine] \\
-        [--work WORK]
+        [--work WORK] [--compile]
 
 ``REV``'s package (``git archive REV gearmodal``) is unpacked as ``gearmodal_base`` under
 ``WORK/base-REV`` (default: the system's temporary folder; kept, so that its numba cache is
@@ -22,6 +22,9 @@ gear rattle, 0.3 s, and the planetary stage with carrier clearance, 4 ms, at a q
 output grid, exact method without peaks: the check's rows); ``planet_peaks`` the same with
 ``gm.simulate``'s default exact peaks; ``turbine`` 2 s of the 600 kW turbine scene at 22.3 rpm,
 connected, its gearbox's CPU time (``stats["gearbox_s"]``, ``--turbine-pairs`` pairs).
+``--compile``: also each side's compile cost, the process CPU of its first exact run (the
+planetary stage, no peaks: the assembly and integrator kernels) in a fresh process with an
+empty ``NUMBA_CACHE_DIR``, the two sides one after the other, twice (``DIR/kernel_ab_compile.csv``).
 Writes ``DIR/kernel_ab.csv`` (one row per case) and prints it.
 """
 
@@ -32,6 +35,7 @@ import hashlib
 import importlib
 import io
 import math
+import os
 import statistics
 import subprocess
 import sys
@@ -119,6 +123,31 @@ def case_run(gm, case: str):
     return run
 
 
+_COMPILE = r"""
+import sys, time
+sys.path[:0] = [sys.argv[2], sys.argv[3]]
+sys.path.insert(0, sys.argv[4])
+import importlib
+gm = importlib.import_module(sys.argv[1])
+import kernel_ab
+model, loads, t_end, dt = kernel_ab.planet(gm)
+asm = model.assemble()
+t = time.process_time()
+gm.simulate(asm, t_end, dt=dt, loads=loads, method="exact", peak_bin=None)
+print(time.process_time() - t)
+"""
+
+
+def compile_seconds(package: str, home: str) -> float:
+    """The first exact run's CPU time of ``package`` (found in ``home``) in a fresh process
+    compiling every kernel (an empty numba cache)."""
+    with tempfile.TemporaryDirectory() as cache:
+        r = subprocess.run([sys.executable, "-c", _COMPILE, package, home, str(ROOT),
+                            str(ROOT / "benchmarks")], capture_output=True, text=True,
+                           check=True, env={**os.environ, "NUMBA_CACHE_DIR": cache})
+    return float(r.stdout.split()[-1])
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--base", required=True, help="git revision of the kernel to compare with")
@@ -127,10 +156,18 @@ def main(argv=None) -> int:
     ap.add_argument("--turbine-pairs", type=int, default=20)
     ap.add_argument("--cases", default="planet,rattle,planet_peaks,turbine")
     ap.add_argument("--work", default=str(Path(tempfile.gettempdir()) / "gearmodal-kernel-ab"))
+    ap.add_argument("--compile", action="store_true", help="also time a fresh compile")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    sys.path.insert(0, base_package(args.base, Path(args.work)))
+    home = base_package(args.base, Path(args.work))
+    if args.compile:
+        comp = [{"round": i, "side": side, "compile_run_cpu_s": compile_seconds(pkg, where)}
+                for i in range(2) for side, pkg, where in (("this", "gearmodal", str(ROOT)),
+                                                          ("base", "gearmodal_base", home))]
+        pd.DataFrame(comp).to_csv(out / "kernel_ab_compile.csv", index=False)
+        print(pd.DataFrame(comp).to_string(index=False), flush=True)
+    sys.path.insert(0, home)
     sys.path.insert(0, str(ROOT))
     import gearmodal_base as base
 
