@@ -34,7 +34,6 @@ import argparse
 import hashlib
 import importlib
 import io
-import math
 import os
 import statistics
 import subprocess
@@ -46,6 +45,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import work_precision as wp
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "studies/scenes/600kw_turbine_10ms.toml"
@@ -73,28 +73,11 @@ def digest(*arrays) -> str:
     return h.hexdigest()[:12]
 
 
-def rattle(gm):
-    """work_precision.py's gear rattle (its model and loads, built with ``gm``)."""
-    m = gm.examples.gear_pair(mesh_damping=2000.0)
-    m.add(gm.Bearing("input_shaft", "pinion", None, stiffness={"theta": 2e3}))
-    m.add(gm.Bearing("output_shaft", "wheel", None, stiffness={"theta": 2e4}))
-    tk = np.arange(int(round(0.3 / 2e-4)) + 1) * 2e-4
-    loads = {"pinion.torque": pd.Series(2.0 + 10.0 * np.sin(2 * np.pi * 100.0 * tk), index=tk)}
-    return m.check(), loads, 0.3, 2e-4 / 4
-
-
-def planet(gm):
-    """work_precision.py's planetary stage with carrier-bearing clearance."""
-    lp = dict(mass={"carrier": 5.43, "ring": 2.35, "sun": 0.4, "planet": 0.66},
-              inertia_over_r2={"carrier": 6.29, "ring": 3.0, "sun": 0.39, "planet": 0.61},
-              bearing={"carrier": 1e8, "ring": 1e8, "sun": 1e8, "planet": 1e8},
-              torsional={"carrier": 1e6, "ring": 1e9, "sun": 1e6},
-              mesh={"sun_planet": 5e8, "ring_planet": 5e8})
-    m = gm.lin_parker_stage(3, **lp, pressure_angle=math.radians(24.6), backlash=2e-6,
-                            mesh_damping=50.0)
-    m.bearings["carrier_support"].clearance = {"x": 2e-5, "y": 2e-5}
-    loads = {"carrier.force_u": 2e3, "sun.force_u": -2e3, "carrier.force_y": -3e3}
-    return m, loads, 0.004, 4e-5 / 4
+def problem(gm, name: str):
+    """work_precision.py's problem ``name`` built with package ``gm``: (model, loads, t_end,
+    dt), ``dt`` a quarter of its output grid."""
+    spec = wp.problems(True)[name]
+    return spec["model"](gm), spec["loads"](spec["t_end"]), spec["t_end"], spec["grid"] / 4
 
 
 def case_run(gm, case: str):
@@ -110,7 +93,8 @@ def case_run(gm, case: str):
             return r.stats["gearbox_s"], digest(r.gearbox.q.to_numpy(),
                                                 r.gearbox.forces.to_numpy())
         return run
-    model, loads, t_end, dt = (rattle if case == "rattle" else planet)(gm)
+    model, loads, t_end, dt = problem(gm, "gear_rattle" if case == "rattle"
+                                      else "planetary_clearance")
     asm = model.assemble()
     opts = {} if case == "planet_peaks" else {"peak_bin": None}
 
@@ -130,7 +114,7 @@ sys.path.insert(0, sys.argv[4])
 import importlib
 gm = importlib.import_module(sys.argv[1])
 import kernel_ab
-model, loads, t_end, dt = kernel_ab.planet(gm)
+model, loads, t_end, dt = kernel_ab.problem(gm, "planetary_clearance")
 asm = model.assemble()
 t = time.process_time()
 gm.simulate(asm, t_end, dt=dt, loads=loads, method="exact", peak_bin=None)

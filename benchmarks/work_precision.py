@@ -117,8 +117,9 @@ ERROR_DEF = ("error = max over output times and DOFs |q - q_ref| / max over time
 
 
 # -- problems -------------------------------------------------------------------------------
-def gear_rattle_model():
-    """The test's 20/40 pair, damped mesh, each wheel on a torsional shaft to the ground."""
+def gear_rattle_model(gm=gm):
+    """The test's 20/40 pair, damped mesh, each wheel on a torsional shaft to the ground
+    (built with the package ``gm``: another revision's, in ``kernel_ab.py``)."""
     m = gm.examples.gear_pair(mesh_damping=2000.0)
     m.add(gm.Bearing("input_shaft", "pinion", None, stiffness={"theta": 2e3}))
     m.add(gm.Bearing("output_shaft", "wheel", None, stiffness={"theta": 2e4}))
@@ -132,8 +133,8 @@ def gear_rattle_loads(t_end, knot=2e-4, mean=2.0, amplitude=10.0, freq=100.0):
                                        index=tk)}
 
 
-def planetary_clearance_model():
-    """``clearance_stage()`` of tests/validation/test_exactness.py."""
+def planetary_clearance_model(gm=gm):
+    """``clearance_stage()`` of tests/validation/test_exactness.py (built with ``gm``)."""
     lp = dict(mass={"carrier": 5.43, "ring": 2.35, "sun": 0.4, "planet": 0.66},
               inertia_over_r2={"carrier": 6.29, "ring": 3.0, "sun": 0.39, "planet": 0.61},
               bearing={"carrier": 1e8, "ring": 1e8, "sun": 1e8, "planet": 1e8},
