@@ -18,7 +18,8 @@ to the ones given for this call's end) or **held** (``hold="hold"``: the values 
 the whole call, a step at its start). Both are integrated exactly as :func:`gearmodal.simulate`
 integrates a load Series: the exact method's pieces end at the call boundaries, and a run
 advanced in chunks is the run of one call with load knots there (``tests/test_stepper.py``:
-events and states equal to rounding).
+events and states equal to rounding), but for a curved :class:`SpeedTorque`, linearised anew
+at each call's start.
 
 **Prescribed motion through a spring** (:class:`Drive`): the host's shaft angle and speed
 drive one coordinate of the gearbox through a torsional spring-damper (the main shaft's
@@ -124,11 +125,15 @@ class SpeedTorque:
     """A torque on rotation ``dof`` that depends on its speed: ``law(speed)`` returns the
     torque on the DOF (N m, in its positive sense) and its derivative by the speed (N m s/rad)
     at ``speed`` (rad/s, absolute). An induction generator's torque-slip curve is one: its
-    slip damping is stiff, so the stepper takes it **implicitly**, linearised at the
-    reference speed, ``law(w_ref) + law'(w_ref) (w - w_ref)``: a constant torque and a damper
-    ``-law'`` in the equations, taken anew at every re-basing of the reference
-    (``reference="follow"``) and at :meth:`Stepper.set_speed_torque`. Its error is that of the
-    tangent over a re-basing's speed drift (``rebase_speed``)."""
+    slip damping is stiff, so the stepper takes it **implicitly**, linearised: over a stretch
+    (a call, or with ``rebase_dt`` a stretch of that grid) that starts at the DOF's speed
+    ``w_k``, ``law(w_k) + law'(w_ref) (w - w_k)``, a constant torque (exact at the stretch's
+    start) and a damper ``-law'(w_ref)`` in the equations. The slope ``law'(w_ref)`` is taken
+    at the reference speed, anew at every re-basing (``reference="follow"``) and at
+    :meth:`Stepper.set_speed_torque`. A linear law is taken exactly; a curved one converges
+    with the stretch, to second order with ``"follow"`` and to first order with ``"fixed"``
+    (whose slope stays the one at its reference speed): ``tests/test_stepper.py``, and
+    ``benchmarks/RESULTS.md`` ("The generator's tangent") on the 600 kW turbine."""
 
     dof: str
     law: object
@@ -454,6 +459,8 @@ class Stepper:
             if self._force_rebase or (ka and self.follow and (
                     not self.rebase_steps or ka % self.rebase_steps == 0)):
                 self._follow(force=self._force_rebase)
+            if self.speed_torque is not None:
+                self._retake_torque()
             # the inputs linear over the call (its ends' values exactly at its ends)
             ga, ha = _between(ka, k0, k1, g0, given), _between(ka, k0, k1, host0, host1)
             gb, hb = _between(kb, k0, k1, g0, given), _between(kb, k0, k1, host0, host1)
@@ -664,16 +671,31 @@ class Stepper:
         if self.speed_torque is not None:
             i = self._st_index[0]
             w = float(self.ratio[i]) * self.ref.om_f
-            try:
-                tau, dtau = self.speed_torque.law(w)
-            except (TypeError, ValueError):
-                raise ModelError("speed_torque.law", f"at {w!r} rad/s: must return (torque, "
-                                 "dtorque/dspeed), two numbers") from None
-            self._tau = _number("speed_torque.law's torque", tau)
-            dtau = _number("speed_torque.law's derivative", dtau)
+            self._tau, dtau = self._law(w)
+            self._tangent = (w, dtau)
             if dtau:
                 out = out + ((i, 0.0, -dtau),)
         return out
+
+    def _law(self, w: float) -> tuple[float, float]:
+        """The speed torque's ``(torque, dtorque/dspeed)`` at speed ``w`` (rad/s), checked."""
+        try:
+            tau, dtau = self.speed_torque.law(w)
+        except (TypeError, ValueError):
+            raise ModelError("speed_torque.law", f"at {w!r} rad/s: must return (torque, "
+                             "dtorque/dspeed), two numbers") from None
+        return (_number("speed_torque.law's torque", tau),
+                _number("speed_torque.law's derivative", dtau))
+
+    def _retake_torque(self) -> None:
+        """The speed torque's constant part re-taken at its DOF's speed now, ``w_k`` (the
+        reference's plus the deflection's): ``law(w_k) - law'(w_f) (w_k - w_f)``, so that
+        over the stretch that starts here the torque is ``law(w_k) + law'(w_f) (w - w_k)``,
+        exact at its start (:class:`SpeedTorque`); the slope stays the tangent's at the
+        reference speed ``w_f``, in the equations since the last re-basing."""
+        w_f, dtau = self._tangent
+        w = w_f + float(self.run.x[self.n + self._st_index[0]])
+        self._tau = self._law(w)[0] - dtau * (w - w_f)
 
     def _follow(self, force: bool = False, move: bool = True) -> None:
         """Re-base the reference rotation at the time reached where the drivetrain has left

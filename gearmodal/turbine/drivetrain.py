@@ -30,11 +30,14 @@ are taken at the new speed, and the velocities re-expressed against it exactly. 
 geometry turns with the reference azimuth and is integrated exactly as the time-periodic
 system it is (:mod:`gearmodal.integrate.periodic`).
 
-The induction generator enters the linear gearbox equations as its tangent at the reference
-speed (a :class:`gearmodal.SpeedTorque`): torque ``T(w_f) + (dT/dw) (w - w_f)``, a constant
-load plus a viscous damper ``dT/dw`` on the generator's rotation, so its strong slip damping
-is implicit (no step limit). The run starts from the drivetrain accelerating rigidly under
-the first loads (the stepper's ``q0="equilibrium"``).
+The induction generator enters the linear gearbox equations as its tangent (a
+:class:`gearmodal.SpeedTorque`): over each aerodynamic step, torque
+``T(w_k) + (dT/dw)(w_f) (w - w_k)`` with ``w_k`` the generator's speed at the step's start,
+a constant load plus a viscous damper ``dT/dw`` at the reference speed ``w_f`` on the
+generator's rotation, so its strong slip damping is implicit (no step limit) and the torque
+is the curve's at every aerodynamic step's start (the torque the turbine's table reports).
+The run starts from the drivetrain accelerating rigidly under the first loads (the stepper's
+``q0="equilibrium"``).
 
 Loads on the gearbox: the rotor's aerodynamic torque on ``rotor.torque``, the generator torque
 on ``generator.torque`` and the shaft-end force on the first planetary carrier
