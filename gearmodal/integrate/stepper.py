@@ -18,8 +18,8 @@ to the ones given for this call's end) or **held** (``hold="hold"``: the values 
 the whole call, a step at its start). Both are integrated exactly as :func:`gearmodal.simulate`
 integrates a load Series: the exact method's pieces end at the call boundaries, and a run
 advanced in chunks is the run of one call with load knots there (``tests/test_stepper.py``:
-events and states equal to rounding), but for a curved :class:`SpeedTorque`, linearised anew
-at each call's start.
+events and states equal to rounding), but for a curved :class:`SpeedTorque` without
+``rebase_dt`` (linearised anew at each call's start).
 
 **Prescribed motion through a spring** (:class:`Drive`): the host's shaft angle and speed
 drive one coordinate of the gearbox through a torsional spring-damper (the main shaft's
@@ -30,7 +30,8 @@ usual two-way coupling of a drivetrain to an aeroelastic code.
 the drivetrain: the input azimuth ``psi(t)``, every wheel at its ``speed_ratio`` times it.
 
 - ``reference="fixed"`` (default): ``psi = omega t`` at ``speed_rpm``, as
-  :func:`gearmodal.simulate` takes it (a run chopped into calls is then one call's run). Without
+  :func:`gearmodal.simulate` takes it (a run chopped into calls is then one call's run, but
+  for a curved :class:`SpeedTorque` without ``rebase_dt``). Without
   a turning geometry the gearbox's rigid rotation (the one motion its stiffness, damping and
   gaps do not see) is moved out of the state into an offset whenever it passes
   :data:`REBASE_ANGLE` at a call's end: exact, since that motion changes no force, and it keeps
@@ -126,14 +127,20 @@ class SpeedTorque:
     torque on the DOF (N m, in its positive sense) and its derivative by the speed (N m s/rad)
     at ``speed`` (rad/s, absolute). An induction generator's torque-slip curve is one: its
     slip damping is stiff, so the stepper takes it **implicitly**, linearised: over a stretch
-    (a call, or with ``rebase_dt`` a stretch of that grid) that starts at the DOF's speed
-    ``w_k``, ``law(w_k) + law'(w_ref) (w - w_k)``, a constant torque (exact at the stretch's
-    start) and a damper ``-law'(w_ref)`` in the equations. The slope ``law'(w_ref)`` is taken
-    at the reference speed, anew at every re-basing (``reference="follow"``) and at
-    :meth:`Stepper.set_speed_torque`. A linear law is taken exactly; a curved one converges
-    with the stretch, to second order with ``"follow"`` and to first order with ``"fixed"``
-    (whose slope stays the one at its reference speed): ``tests/test_stepper.py``, and
-    ``benchmarks/RESULTS.md`` ("The generator's tangent") on the 600 kW turbine."""
+    (a call; with ``rebase_dt``, a stretch of that grid, calls split there) that starts at the
+    DOF's speed ``w_k``, ``law(w_k) + law'(w_t) (w - w_k)``, a constant torque (exact at the
+    stretch's start) and a damper ``-law'(w_t)`` in the equations. The slope is the law's at
+    ``w_t``, the DOF's speed when the tangent was last taken: at the start (the reference
+    speed), at every re-basing (``reference="follow"``), at
+    :meth:`Stepper.set_speed_torque`, and wherever the speed has left ``w_t`` by
+    ``rebase_speed`` of it and the slope has changed (a new system; the slope's change acts
+    explicitly over a stretch, so it is kept to that of such a drift). A linear law is taken
+    exactly; a curved one converges with the stretch, to second order
+    (``tests/test_stepper.py``; on the 600 kW turbine, ``benchmarks/RESULTS.md``, "The
+    generator's tangent"). A run chopped into calls between the points of ``rebase_dt``'s
+    grid is then the run of one call per point; without ``rebase_dt`` it depends on the
+    calls through this linearisation only.
+    """
 
     dof: str
     law: object
@@ -176,7 +183,8 @@ class Stepper:
         (then it does, at the level of the re-basing).
     azimuth0 : the input azimuth at time 0, rad (a turning geometry's start; the reference
         rotation's origin).
-    speed_torque : a :class:`SpeedTorque` (a generator), linearised at the reference speed.
+    speed_torque : a :class:`SpeedTorque` (a generator), linearised at each stretch's start
+        (its docstring).
     top_frequency_hz : the mass-scaling rung (:mod:`gearmodal.massscale`): the modes above
         this frequency slowed to it by added mass along them; ``None``: the full model.
     """
@@ -291,6 +299,7 @@ class Stepper:
         self._outputs(asm, outputs, drive)
         self._qv_names = self.output_names[:2 * len(asm.dof_names)]  # q, then velocities
         self._force_rebase = False  # set_speed_torque: re-base at the next call's start
+        self._tangents = 0  # the speed torque's tangents taken anew (_retake_torque)
         self._reserved = None  # reserve(): the output steps held
         self._cpu = time.process_time() - cpu
         self._done = None
@@ -449,17 +458,18 @@ class Stepper:
         # the given loads at the call's start
         g0 = given if hold == "hold" else self._given(self.u, start, "start")
         cpu = time.process_time()
-        # the call's stretches: to each re-basing point of "follow" inside it, then its end
+        # the call's stretches: to each point of the re-basing grid inside it (where
+        # "follow" may re-base and a speed torque is taken anew), then its end
         ends = [k1]
-        if self.follow and self.rebase_steps:
+        if self.rebase_steps and (self.follow or self.speed_torque is not None):
             m = self.rebase_steps
             ends = list(range((k0 // m + 1) * m, k1, m)) + [k1]
         ka = k0
         for kb in ends:
-            if self._force_rebase or (ka and self.follow and (
-                    not self.rebase_steps or ka % self.rebase_steps == 0)):
+            on_grid = not self.rebase_steps or ka % self.rebase_steps == 0
+            if self._force_rebase or (ka and self.follow and on_grid):
                 self._follow(force=self._force_rebase)
-            if self.speed_torque is not None:
+            if self.speed_torque is not None and on_grid:
                 self._retake_torque()
             # the inputs linear over the call (its ends' values exactly at its ends)
             ga, ha = _between(ka, k0, k1, g0, given), _between(ka, k0, k1, host0, host1)
@@ -567,6 +577,7 @@ class Stepper:
         stats = {**run.stats, "cpu_s": self._cpu, "n_events": run.n_events,
                  "n_steps": run.k,
                  "n_rebases": len(self.ref.stretches) - 1 if self.follow else len(self._rebases),
+                 "speed_torque_tangents": self._tangents,
                  **(stats or {})}
         t_end = self._t(run.k)
         settings = {**self.settings, "t_end": t_end, **(settings or {})}
@@ -662,17 +673,20 @@ class Stepper:
                              "with a speed_ratio")
         return r * (self.ratio[j] / r[j])
 
-    def _grounded(self) -> tuple:
+    def _grounded(self, speed: float | None = None) -> tuple:
         """The springs and dampers to ground: the drive's, and the speed torque's tangent
-        damper at the reference speed now (:class:`SpeedTorque`), whose constant torque goes
-        to ``_tau``."""
+        (:class:`SpeedTorque`) at its DOF's ``speed`` (rad/s, absolute; None: the reference
+        speed), a damper on the deflection's velocity whose constant torque goes to
+        ``_tau``."""
         out = self._drive_grounded
         self._tau = 0.0
         if self.speed_torque is not None:
             i = self._st_index[0]
-            w = float(self.ratio[i]) * self.ref.om_f
-            self._tau, dtau = self._law(w)
-            self._tangent = (w, dtau)
+            w_f = float(self.ratio[i]) * self.ref.om_f
+            w_t = w_f if speed is None else speed
+            tau, dtau = self._law(w_t)
+            self._tau = tau - dtau * (w_t - w_f)
+            self._tangent = (w_t, dtau)
             if dtau:
                 out = out + ((i, 0.0, -dtau),)
         return out
@@ -688,14 +702,24 @@ class Stepper:
                 _number("speed_torque.law's derivative", dtau))
 
     def _retake_torque(self) -> None:
-        """The speed torque's constant part re-taken at its DOF's speed now, ``w_k`` (the
-        reference's plus the deflection's): ``law(w_k) - law'(w_f) (w_k - w_f)``, so that
-        over the stretch that starts here the torque is ``law(w_k) + law'(w_f) (w - w_k)``,
-        exact at its start (:class:`SpeedTorque`); the slope stays the tangent's at the
-        reference speed ``w_f``, in the equations since the last re-basing."""
-        w_f, dtau = self._tangent
-        w = w_f + float(self.run.x[self.n + self._st_index[0]])
-        self._tau = self._law(w)[0] - dtau * (w - w_f)
+        """The speed torque taken anew at its DOF's speed now, ``w_k`` (the reference's
+        ``w_f`` plus the deflection's): its constant part ``law(w_k) - s (w_k - w_f)``, so
+        that over the stretch that starts here the torque is ``law(w_k) + s (w - w_k)``,
+        exact at its start, with the slope ``s`` of the last tangent (taken at ``w_t``, in
+        the equations as a damper). Where the law's slope has changed and ``w_k`` has left
+        ``w_t`` by ``rebase_speed`` of it, the tangent is taken anew at ``w_k`` (a new system,
+        the reference kept): the slope's error, explicit over a stretch, stays that of a
+        drift of ``rebase_speed`` (:class:`SpeedTorque`)."""
+        w_t, dtau = self._tangent
+        i = self._st_index[0]
+        w_f = float(self.ratio[i]) * self.ref.om_f
+        w = w_f + float(self.run.x[self.n + i])
+        tau, slope = self._law(w)
+        if slope != dtau and abs(w - w_t) > self.rebase_speed * max(abs(w_t), 1e-3):
+            self._follow(force=True, move=False)
+            self._tangents += 1
+            return
+        self._tau = tau - dtau * (w - w_f)
 
     def _follow(self, force: bool = False, move: bool = True) -> None:
         """Re-base the reference rotation at the time reached where the drivetrain has left
@@ -721,7 +745,11 @@ class Stepper:
         om = ref.om_f
         fresh = force or abs(om - self._om_rho) > max(abs(self._om_rho), 1e-3)
         rho, sb = (None, None) if fresh else shared_bounds(self.system)
-        self.grounded = self._grounded()
+        speed = None  # the speed torque's DOF's speed now (absolute)
+        if self.speed_torque is not None:
+            i = self._st_index[0]
+            speed = float(self.ratio[i]) * om + float(x[n + i])
+        self.grounded = self._grounded(speed)
         # the stretch's start azimuth: its tables' times count from there (as the driver
         # takes it: the origin plus the system's speed times the run's output time)
         speed_rpm = om / RPM
@@ -744,12 +772,16 @@ class Stepper:
         if math.isfinite(big) and big <= DIVERGED:
             return
         method = self.settings["method"]
+        hint = {"newmark": "Newmark switches contacts at step ends, which is unstable with "
+                           "stiff meshes and a clearance (benchmarks/RESULTS.md, stability "
+                           "map): use method='exact'",
+                "exact": "the exact method solves the equations as given, so they grow: look "
+                         "for a negative stiffness or damping in the model, or a speed torque "
+                         "that rises with the speed"}.get(method, "reduce dt or use "
+                                                                  "method='exact'")
         raise SolveError(
             "method", f"= {method!r}: the gearbox state diverged in the step ending at t = "
-            f"{self._t(k):.3f} s (largest entry {big:.3g}, above {DIVERGED:g}); "
-            + ("Newmark switches contacts at step ends, which is unstable with stiff meshes "
-               "and a clearance (benchmarks/RESULTS.md, stability map): use method='exact'"
-               if method == "newmark" else "reduce dt or use method='exact'"))
+            f"{self._t(k):.3f} s (largest entry {big:.3g}, above {DIVERGED:g}); {hint}")
 
     def _tables(self, X: np.ndarray):
         """``(q, v)`` rows of the result's tables from state rows ``X`` at the time reached
