@@ -23,9 +23,10 @@ next, before the torque was taken at every step). ``error``: the largest relativ
 of the study's four quantities (:data:`gearmodal.auto.QUANTITIES`) and the mean power from
 this code's ``every step`` run (:func:`gearmodal.auto.difference`). This code's runs are timed
 in alternation, ``--rounds`` times (process CPU, the minimum); ``cpu_ratio``: over
-``default``'s. The clearance gearbox rattles in its clearance: any change of a run moves its
-single-run peaks by about 1-2 % (:mod:`gearmodal.auto`), so its errors above that say nothing
-of the tangent.
+``default``'s; ``tangents``: the generator's tangents taken anew between re-basings (its
+speed had left the last one's by ``rebase_speed``). The clearance gearbox rattles in its
+clearance: any change of a run moves its single-run peaks by about 1-2 %
+(:mod:`gearmodal.auto`), so its errors above that say nothing of the tangent.
 
 Writes ``DIR/generator_tangent.csv`` and prints it.
 """
@@ -53,7 +54,7 @@ COMPARED = (*QUANTITIES, "mean_power_W")
 
 
 def runner(package: str, case: str, duration: float):
-    """A function ``run(setting) -> (cpu s, n_rebases, summary)`` for the study's ``case``
+    """A function ``run(setting) -> (cpu s, stats, summary)`` for the study's ``case``
     made with ``package`` (``gearmodal`` or ``gearmodal_base``)."""
     import double_contact as dc
 
@@ -67,7 +68,7 @@ def runner(package: str, case: str, duration: float):
         t = time.process_time()
         r = sim(sc.turbine, sc.wind, sc.model, sc.t_end, dt=sc.dt,
                 **{**sc.drivetrain, **SETTINGS[setting]})
-        return time.process_time() - t, r.stats["n_rebases"], summarize(r)
+        return time.process_time() - t, r.stats, summarize(r)
     return run
 
 
@@ -95,7 +96,8 @@ def main(argv=None) -> int:
                 got[s] = (n, summ)
         ref = got["every step"][1]
         for s, (n, summ) in got.items():
-            rows.append({"gearbox": case, "code": "this", "setting": s, "n_rebases": n,
+            rows.append({"gearbox": case, "code": "this", "setting": s,
+                         "n_rebases": n["n_rebases"], "tangents": n["speed_torque_tangents"],
                          "cpu_s": min(cpu[s]),
                          "cpu_ratio": min(cpu[s]) / min(cpu["default"]),
                          "error": difference(summ, ref, COMPARED),
@@ -104,7 +106,9 @@ def main(argv=None) -> int:
             base = runner("gearmodal_base", case, a.duration)
             for s in ("default", "every step"):
                 c, n, summ = base(s)
-                rows.append({"gearbox": case, "code": a.base, "setting": s, "n_rebases": n,
+                rows.append({"gearbox": case, "code": a.base, "setting": s,
+                             "n_rebases": n["n_rebases"],
+                             "tangents": n.get("speed_torque_tangents", float("nan")),
                              "cpu_s": c, "cpu_ratio": float("nan"),
                              "error": difference(summ, ref, COMPARED),
                              **{q: summ[q] for q in COMPARED}})
