@@ -1772,26 +1772,34 @@ def _stretch_forces(F, k, k2, span, MinvU, GT, fo):
     solution) does not depend on the output step when the samples lie on one line; for a
     turning system the load harmonics ``GT`` likewise. Returns whether a turning load is
     nonzero."""
-    gF, gS, VA, VS = fo.gF, fo.gS, fo.VA, fo.VS
-    n = gF.shape[0]
+    return _line(F, k, k2, span, MinvU, GT, fo.gF, fo.gS, fo.VA, fo.VS)
+
+
+@numba.njit(cache=True, inline="always")
+def _line(F, a, b, span, MinvU, GT, g, gs, V, VS):
+    """The line of force rows ``F[a]`` to ``F[b]``, ``span`` s apart, through ``M^-1 U``
+    (``MinvU``): ``g = MinvU F[a]`` and its rate ``gs = MinvU (F[b] - F[a]) / span``; the
+    turning harmonics ``GT`` likewise into ``V``, ``VS``. ``b = a``: a constant (rate 0).
+    Returns whether a turning harmonic of the line is nonzero."""
+    n = g.shape[0]
     m = F.shape[1]
     for i in range(n):
         a0 = 0.0
         a1 = 0.0
         for j in range(m):
-            a0 += MinvU[i, j] * F[k, j]
-            a1 += MinvU[i, j] * (F[k2, j] - F[k, j])
-        gF[i] = a0
-        gS[i] = a1 / span
+            a0 += MinvU[i, j] * F[a, j]
+            a1 += MinvU[i, j] * (F[b, j] - F[a, j])
+        g[i] = a0
+        gs[i] = a1 / span
     loads = False
-    for hh in range(1, VA.shape[0]):
+    for hh in range(1, V.shape[0]):
         for i in range(n):
             z0 = 0j
             z1 = 0j
             for j in range(m):
-                z0 += GT[hh, i, j] * F[k, j]
-                z1 += GT[hh, i, j] * (F[k2, j] - F[k, j])
-            VA[hh, i] = z0
+                z0 += GT[hh, i, j] * F[a, j]
+                z1 += GT[hh, i, j] * (F[b, j] - F[a, j])
+            V[hh, i] = z0
             VS[hh, i] = z1 / span
             if z0 != 0.0 or z1 != 0.0:
                 loads = True
@@ -1829,37 +1837,18 @@ def _knot_forces(t, h, il, due, tL0, turning_loads, tie, loads, fo):
     ends at the next knot. Returns ``(il, h, tL0, turning_loads)``: the interval, the piece,
     the knot's time and whether a turning load of the knots is nonzero."""
     TL, FL, MinvUL, GTL = loads[0], loads[1], loads[2], loads[3]
-    gLa, gLs, VLa, VLs = fo.gLa, fo.gLs, fo.VLa, fo.VLs
     nk = TL.shape[0]
-    n = gLa.shape[0]
     while il + 2 < nk and TL[il + 1] <= t + tie:
         il += 1
         due = True
     if due:
         tL0 = TL[il]
-        span_l = TL[il + 1] - TL[il] if nk > 1 else 1.0
-        for i in range(n):
-            a0 = 0.0
-            a1 = 0.0
-            for j in range(FL.shape[1]):
-                a0 += MinvUL[i, j] * FL[il, j]
-                if nk > 1:
-                    a1 += MinvUL[i, j] * (FL[il + 1, j] - FL[il, j])
-            gLa[i] = a0
-            gLs[i] = a1 / span_l
-        turning_loads = False
-        for hh in range(1, VLa.shape[0]):
-            for i in range(n):
-                z0 = 0j
-                z1 = 0j
-                for j in range(FL.shape[1]):
-                    z0 += GTL[hh, i, j] * FL[il, j]
-                    if nk > 1:
-                        z1 += GTL[hh, i, j] * (FL[il + 1, j] - FL[il, j])
-                VLa[hh, i] = z0
-                VLs[hh, i] = z1 / span_l
-                if z0 != 0.0 or z1 != 0.0:
-                    turning_loads = True
+        if nk > 1:
+            turning_loads = _line(FL, il, il + 1, TL[il + 1] - TL[il], MinvUL, GTL, fo.gLa,
+                                  fo.gLs, fo.VLa, fo.VLs)
+        else:  # a single knot: a constant
+            turning_loads = _line(FL, il, il, 1.0, MinvUL, GTL, fo.gLa, fo.gLs, fo.VLa,
+                                  fo.VLs)
     if il + 2 < nk and t + tie < TL[il + 1] < t + h:
         h = TL[il + 1] - t  # the piece ends at the next load knot
     return il, h, tL0, turning_loads
