@@ -303,6 +303,33 @@ def test_a_speed_torque_without_slope_settles_at_its_root(pair):
 
 
 @pytest.mark.parametrize("reference", ["fixed", "follow"])
+def test_outputs_after_a_speed_torque_tangent_are_the_results_forces(stage, reference):
+    """The forces a call returns are the result's at the call's end, also after the speed
+    torque's tangent was taken anew between re-basings (a new system made mid-stretch of the
+    reference): the turning carrier's bearing rows are evaluated at the new system's own
+    time (counted from the reference's re-basing instead, they were off by several times
+    the force)."""
+    w_r = RATIO * 600 * math.pi / 30
+
+    def law(w):
+        s = w - w_r
+        return -2e3 * s - 2e3 * s**3, -2e3 - 6e3 * s**2
+
+    st = gm.Stepper(stage, dt=1e-4, speed_rpm=600.0, q0="equilibrium", reference=reference,
+                    loads={"carrier.torque": 2e5, "sun.torque": -0.8 * 2e5 / RATIO,
+                           "carrier.force_x": 3e5},
+                    speed_torque=gm.SpeedTorque("sun.theta", law), rebase_speed=1e-3)
+    assert st.system.turning
+    got = {j * 50: st.advance(j * 5e-3) for j in range(1, 25)}
+    res = st.result()
+    assert res.stats["speed_torque_tangents"] >= 2
+    for k, out in got.items():
+        for name in ("carrier_bearing.x", "carrier_bearing.y", "ring_planet1.front"):
+            row = float(res.forces[name].iloc[k])
+            assert out[name] == pytest.approx(row, rel=1e-9, abs=1e-6), (k, name)
+
+
+@pytest.mark.parametrize("reference", ["fixed", "follow"])
 def test_a_curved_speed_torque_does_not_depend_on_the_calls(pair, reference):
     """With ``rebase_dt`` the speed torque is taken anew on that grid only, so a run with
     calls ending between its points is the run of one call per point, to rounding (taken at

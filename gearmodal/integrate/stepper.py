@@ -177,9 +177,11 @@ class Stepper:
         the state and the exact peaks: a host that reads the outputs alone (an FMU without a
         result directory) runs in constant memory.
     reference : ``"fixed"`` or ``"follow"`` (module docstring); ``rebase_speed`` (relative)
-        and ``rebase_angle`` (rad): when ``"follow"`` re-bases; ``rebase_dt`` (s): where it
-        may, every ``rebase_dt`` from the start (the calls split there, their inputs linear
-        across), so that the run does not depend on the call ends; None: at every call's end
+        and ``rebase_angle`` (rad): when ``"follow"`` re-bases (``rebase_speed`` also: where
+        a speed torque's tangent is taken anew); ``rebase_dt`` (s): where it may, and where a
+        speed torque is taken anew, every ``rebase_dt`` from the start (the calls split there,
+        their inputs linear across), so that the run does not depend on the call ends; None:
+        at every call's end
         (then it does, at the level of the re-basing).
     azimuth0 : the input azimuth at time 0, rad (a turning geometry's start; the reference
         rotation's origin).
@@ -293,13 +295,17 @@ class Stepper:
                          "reference": reference, "stepped": True,
                          "azimuth0": psi0, "top_frequency_hz": top_frequency_hz,
                          "mass_scaling": self.mass_scaling}
+        if self.follow or self.speed_torque is not None:
+            self.settings["rebase_speed"] = self.rebase_speed
         if self.follow:
-            self.settings.update(rebase_speed=self.rebase_speed,
-                                 rebase_angle=self.rebase_angle)
+            self.settings["rebase_angle"] = self.rebase_angle
+        if self.rebase_steps:
+            self.settings["rebase_dt"] = self._rebase_dt
         self._outputs(asm, outputs, drive)
         self._qv_names = self.output_names[:2 * len(asm.dof_names)]  # q, then velocities
         self._force_rebase = False  # set_speed_torque: re-base at the next call's start
         self._tangents = 0  # the speed torque's tangents taken anew (_retake_torque)
+        self._t_sys = 0.0  # the time the system was made at: its turning geometry's zero
         self._reserved = None  # reserve(): the output steps held
         self._cpu = time.process_time() - cpu
         self._done = None
@@ -506,7 +512,7 @@ class Stepper:
         if self._forces:
             K = mesh_stiffness(self.system, np.array([self.ref.at(t)]))
             f = self.fmap.rows(self.system, x[None, :], self.run.s[None, :],
-                               np.array([t - self.ref.t_f]), K)
+                               np.array([t - self._t_sys]), K)
             out.update(zip(self.fmap.labels, f[0].tolist(), strict=True))
         if self.drive is not None:
             out["drive.torque"] = float(self._drive_torque())
@@ -761,7 +767,7 @@ class Stepper:
             self._om_rho = om
         if not system.turning:
             self._F = system.f_const.copy()
-        self.system = system
+        self.system, self._t_sys = system, t
         self.run.rebase(system, x, ref.at(t))
 
     def _diverged(self, k: int) -> None:

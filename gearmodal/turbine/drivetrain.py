@@ -34,7 +34,8 @@ The induction generator enters the linear gearbox equations as its tangent (a
 :class:`gearmodal.SpeedTorque`): over each aerodynamic step, torque
 ``T(w_k) + (dT/dw)(w_t) (w - w_k)`` with ``w_k`` the generator's speed at the step's start,
 a constant load plus a viscous damper ``dT/dw`` on the generator's rotation, taken at its
-speed ``w_t`` at the last re-basing, so its strong slip damping is implicit (no step limit)
+speed ``w_t`` at the last re-basing (or anew where its speed has moved by ``rebase_speed``
+since: :class:`gearmodal.SpeedTorque`), so its strong slip damping is implicit (no step limit)
 and the torque is the curve's at every aerodynamic step's start (the torque the turbine's
 table reports).
 The run starts from the drivetrain accelerating rigidly under the first loads (the stepper's

@@ -20,7 +20,8 @@ Loads across an aerodynamic step (``aero_hold``):
 
 The induction generator is a :class:`gearmodal.SpeedTorque` (its torque-slip curve, taken
 implicitly: at the generator's speed at each aerodynamic step's start, its slope at the
-last re-basing's; the stiff slip damping sets no step limit); it is off the
+last re-basing's or where the speed has since moved by ``rebase_speed``; the stiff slip
+damping sets no step limit); it is off the
 grid (no torque) until the generator reaches synchronous speed, unless ``connected``.
 
 A controlled turbine (``Turbine.generator`` None, a ``controller`` given: ROSCO for the NREL
