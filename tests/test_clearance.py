@@ -158,8 +158,10 @@ def test_round_clearance_by_scipy_and_polygon_convergence():
 
     loads = {"m.force_x": lambda t: f0 * np.cos(w * t) * ramp(t),
              "m.force_y": lambda t: f0 * np.sin(w * t) * ramp(t)}
+    # rtol 1e-8: within 4e-7 of c and of k c of the run at 1e-10 (first event 3e-9 s apart),
+    # far below the few % compared here, at a sixth of its CPU (measured 2026-11-28)
     rnd = gm.simulate(puck("round", damping=600.0), 0.6, dt=1e-3, loads=loads,
-                      method="scipy", scipy_method="DOP853", rtol=1e-10, atol=1e-14)
+                      method="scipy", scipy_method="DOP853", rtol=1e-8, atol=1e-12)
     assert list(rnd.events.contact.unique()) == ["radial"]
     fr = np.hypot(rnd.forces["b.x"], rnd.forces["b.y"]).to_numpy()
     assert fr.max() == pytest.approx(f0, rel=0.02)  # rolling with the load at the end
