@@ -247,6 +247,12 @@ def test_speed_torque_set_before_the_first_call(pair):
                .speed_ratio) > 1.0  # the law acted
 
 
+def _cubic_law(w, w_s=-50.0):
+    """A curved speed torque on the wheel: linear plus cubic in the slip from ``w_s``, with its
+    derivative."""
+    return -0.02 * (w - w_s) - 2e-4 * (w - w_s) ** 3, -0.02 - 6e-4 * (w - w_s) ** 2
+
+
 def _curved_law_error(pair, reference: str, h: float, t_end: float = 1.0) -> float:
     """Largest error of the wheel's speed under a curved speed torque (a cubic in the slip)
     against the pair's rigid equation ``J w_p' = T + r tau(r w_p)`` solved by ``solve_ivp``,
@@ -257,11 +263,7 @@ def _curved_law_error(pair, reference: str, h: float, t_end: float = 1.0) -> flo
 
     r = pair.bodies["wheel"].speed_ratio
     j = pair.bodies["pinion"].inertia + r * r * pair.bodies["wheel"].inertia
-    w_s, torque, w0 = -50.0, 0.5, 600 * math.pi / 30
-
-    def law(w):
-        return -0.02 * (w - w_s) - 2e-4 * (w - w_s) ** 3, -0.02 - 6e-4 * (w - w_s) ** 2
-
+    torque, w0, law = 0.5, 600 * math.pi / 30, _cubic_law
     ref = solve_ivp(lambda t, y: [(torque + r * law(r * y[0])[0]) / j], (0.0, t_end), [w0],
                     rtol=1e-12, atol=1e-12, dense_output=True)
     st = gm.Stepper(pair, dt=1.25e-4, loads={"pinion.torque": torque}, speed_rpm=600.0,
@@ -334,18 +336,14 @@ def test_a_curved_speed_torque_does_not_depend_on_the_calls(pair, reference):
     """With ``rebase_dt`` the speed torque is taken anew on that grid only, so a run with
     calls ending between its points is the run of one call per point, to rounding (taken at
     every call's start instead, the two ran up to 16 % of the speed's swing apart)."""
-    w_s = -50.0
-
-    def law(w):
-        return -0.02 * (w - w_s) - 2e-4 * (w - w_s) ** 3, -0.02 - 6e-4 * (w - w_s) ** 2
-
     grid = np.arange(1, 26) * 0.02
     cuts = np.unique(np.concatenate([grid, np.arange(1, 4000, 67) * 1.25e-4]))
 
     def run(ends):
         st = gm.Stepper(pair, dt=1.25e-4, loads={"pinion.torque": 0.5}, speed_rpm=600.0,
-                        speed_torque=gm.SpeedTorque("wheel.theta", law), q0="equilibrium",
-                        reference=reference, rebase_dt=0.02, outputs=["wheel.theta.velocity"])
+                        speed_torque=gm.SpeedTorque("wheel.theta", _cubic_law),
+                        q0="equilibrium", reference=reference, rebase_dt=0.02,
+                        outputs=["wheel.theta.velocity"])
         got = {round(t / 1.25e-4): st.advance(t)["wheel.theta.velocity"] for t in ends}
         return np.array([got[round(t / 1.25e-4)] for t in grid])
 
