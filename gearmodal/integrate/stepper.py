@@ -697,6 +697,13 @@ class Stepper:
                 out = out + ((i, 0.0, -dtau),)
         return out
 
+    def _st_speed(self, x: np.ndarray, om: float) -> tuple[float, float]:
+        """The speed torque's DOF's reference speed at reference speed ``om`` and its speed
+        in state ``x`` (deflections from that reference), rad/s, absolute."""
+        i = self._st_index[0]
+        w_f = float(self.ratio[i]) * om
+        return w_f, w_f + float(x[self.n + i])
+
     def _law(self, w: float) -> tuple[float, float]:
         """The speed torque's ``(torque, dtorque/dspeed)`` at speed ``w`` (rad/s), checked."""
         try:
@@ -717,9 +724,7 @@ class Stepper:
         the reference kept): the slope's error, explicit over a stretch, stays that of a
         drift of ``rebase_speed`` (:class:`SpeedTorque`)."""
         w_t, dtau = self._tangent
-        i = self._st_index[0]
-        w_f = float(self.ratio[i]) * self.ref.om_f
-        w = w_f + float(self.run.x[self.n + i])
+        w_f, w = self._st_speed(self.run.x, self.ref.om_f)
         tau, slope = self._law(w)
         if slope != dtau and abs(w - w_t) > self.rebase_speed * max(abs(w_t), 1e-3):
             self._follow(force=True, move=False)
@@ -751,10 +756,7 @@ class Stepper:
         om = ref.om_f
         fresh = force or abs(om - self._om_rho) > max(abs(self._om_rho), 1e-3)
         rho, sb = (None, None) if fresh else shared_bounds(self.system)
-        speed = None  # the speed torque's DOF's speed now (absolute)
-        if self.speed_torque is not None:
-            i = self._st_index[0]
-            speed = float(self.ratio[i]) * om + float(x[n + i])
+        speed = None if self.speed_torque is None else self._st_speed(x, om)[1]
         self.grounded = self._grounded(speed)
         # the stretch's start azimuth: its tables' times count from there (as the driver
         # takes it: the origin plus the system's speed times the run's output time)
