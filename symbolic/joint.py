@@ -19,6 +19,21 @@ penetration, the side is in contact)
 
 ordered ``x+, x-, y+, y-, z+, z-, rx+, rx-, ry+, ry-, theta+, theta-``, with Jacobians
 ``d p / d q_a``, ``d p / d q_b`` at ``q = 0``.
+
+The geometric stiffness of a joint that carries a force (DESIGN 2.5a) needs the curvature of
+its deflection: with ``f`` the force in each direction (joint axes; N and N m), the force adds
+``sum_i f_i d2 g^x_i / dq dq`` (``q = [q_a; q_b; r_x]``) to the stiffness, where the
+deflection is measured in axes that turn with a body ``x`` by its small rotation ``r_x``
+(the body the load turns with: ``gearmodal.model.bearing``):
+
+    g^x = [ E^T Rs(r_x)^T ((u_a + (Rs(r_a) - I) pa) - (u_b + (Rs(r_b) - I) pb)) ;
+            E^T (r_a - r_b) ].
+
+Its first derivatives at 0 are those of ``g`` (the relative displacement vanishes there); its
+curvature holds the offsets' rotations and the turning of the axes against the relative
+displacement. ``g^x`` is invariant under a rigid rotation of ``a``, ``b`` and ``x`` at any
+nearby configuration, a loaded and deflected one too (see ``gearmodal.assembly``, geometric
+stiffness).
 """
 
 from __future__ import annotations
@@ -37,6 +52,7 @@ CLEAR = sp.symbols("cx cy cz crx cry ctheta", real=True)
 
 QA = sp.symbols("uax uay uaz rax ray raz", real=True)
 QB = sp.symbols("ubx uby ubz rbx rby rbz", real=True)
+RX = sp.symbols("rxx rxy rxz", real=True)
 
 _DOCS = {
     pax: "x of the offset from a's centre to the joint point (global axes)",
@@ -68,8 +84,13 @@ def derive() -> dict[str, sp.Matrix]:
     gaps = sp.Matrix([sign * g[i] - CLEAR[i] for i in range(6) for sign in (1, -1)])
     Ja = gaps.jacobian(QA).subs(zero)
     Jb = gaps.jacobian(QB).subs(zero)
+    # curvature at 0 of the deflection in axes that turn with x (module docstring), stacked:
+    # rows 15 i .. 15 i + 14 are d2 g^x_i / dq dq, q = [q_a; q_b; r_x]
+    gx = sp.Matrix.vstack(E.T @ Rs(RX).T @ (dpa - dpb), E.T @ (sp.Matrix(ra) - sp.Matrix(rb)))
+    zero_x = dict.fromkeys(QA + QB + RX, 0)
+    H = sp.Matrix.vstack(*(sp.hessian(gx[i], QA + QB + RX).subs(zero_x) for i in range(6)))
     return {"g": g, "Ga": Ga, "Gb": Gb, "Ga_q": Ga_q, "Gb_q": Gb_q, "gaps": gaps, "Ja": Ja,
-            "Jb": Jb}
+            "Jb": Jb, "H": H.applyfunc(sp.expand)}
 
 
 def kernels() -> list[Kernel]:
@@ -101,6 +122,15 @@ def kernels() -> list[Kernel]:
             "Constraint gradients (Ga, Gb), each (6, 6), of the exact residual at (qa, qb): "
             "the tangent of a nonlinear joint away from q = 0 (DESIGN 2.5).",
             output_names=["Ga", "Gb"],
+        ),
+        Kernel(
+            "joint_curvatures",
+            geo,
+            [d["H"]],
+            "Curvatures (90, 15) at q = 0 of the joint deflection in axes turning with a body x\n"
+            "(module docstring): rows 15 i .. 15 i + 14 are d2 g^x_i / d[q_a; q_b; r_x]^2 of\n"
+            "direction i (x, y, z, rx, ry, theta); a force f_i carried in direction i adds f_i\n"
+            "times it to the stiffness (DESIGN 2.5a).",
         ),
         Kernel(
             "bearing_gaps",

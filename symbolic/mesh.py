@@ -23,6 +23,23 @@ flanks interpenetrate) is
 Its Jacobian at ``q = 0`` reproduces Lin & Parker's sun-planet and ring-planet deflections
 (``u_j = r_j theta_j``) for the spur front flank; ``s = -1`` flips the rotational and
 tangential terms and keeps the radial ones (a radial approach closes both flanks).
+
+The geometric stiffness of a flank that carries a force ``f`` (DESIGN 2.5a) is ``f`` times
+the curvature of the gap. ``d`` above holds the line of action fixed, which is exact for the
+wheels' rotations but not for their translations: a relative translation across the line of
+action turns the common tangent of the base circles. To second order that is the belt (or
+string) analogy of involute gearing: the contact's compression is the change of the distance
+between the two base-circle tangent points ``P_a``, ``P_b`` of the transverse plane,
+
+    d2 = d + cos(beta_b) (delta . t)^2 / (2 l),
+    l = (P_a - P_b) . n_t = -sigma |c_b - c_a| sin(alpha),
+
+with ``delta`` the relative displacement of the two points and ``t = z_hat x n_t``. It matches
+the involute's own law (the compression ``-(rba + sigma rbb) (inv alpha_w - inv alpha)``
+of a centre distance change has the curvature ``-cos^2(alpha) / (a sin(alpha))`` per unit of
+distance squared, which ``d2`` gives), and, unlike ``d``, it is invariant under a rigid
+rotation of both wheels about the stage axis to second order: the property that makes a
+steadily turning drivetrain's rigid rotation neutral (see ``gearmodal.assembly``).
 """
 
 from __future__ import annotations
@@ -104,7 +121,24 @@ def derive() -> dict[str, sp.Expr | sp.Matrix]:
     raw_gap = (da - db).dot(raw["n"])
     zero = dict.fromkeys(QA + QB, 0)
     jac = sp.Matrix([_reduce(sp.diff(raw_gap, x).subs(zero)) for x in QA + QB])
-    return {"gap": gap, "jacobian": jac}
+    return {"gap": gap, "jacobian": jac, "curvature": _curvature(raw, raw_gap, zero)}
+
+
+def _curvature(raw: dict, raw_gap: sp.Expr, zero: dict) -> sp.Matrix:
+    """Hessian (12, 12) at ``q = 0`` of the belt gap ``d2`` (module docstring)."""
+    e = sp.Matrix([_ex, _ey, 0])
+    n_t = sp.Matrix([raw["n"][0], raw["n"][1], 0]) / sp.cos(beta_b)
+    t = sp.Matrix([-n_t[1], n_t[0], 0])
+    ua, ra = sp.Matrix(QA[:3]), QA[3:]
+    ub, rb = sp.Matrix(QB[:3]), QB[3:]
+    delta = (ua + (Rs(ra) - sp.eye(3)) @ raw["pa"]) - (ub + (Rs(rb) - sp.eye(3)) @ raw["pb"])
+    across = sp.Matrix([_reduce(sp.diff(delta.dot(t), x).subs(zero)) for x in QA + QB])
+    # l = (P_a - P_b) . n_t with P_a - P_b = -D e + pa - pb (D the centre distance)
+    dist = sp.sqrt((cbx - cax) ** 2 + (cby - cay) ** 2)
+    length = _reduce((-e * sp.Symbol("D") + raw["pa"] - raw["pb"]).dot(n_t)).subs(
+        sp.Symbol("D"), dist)
+    own = sp.hessian(raw_gap, QA + QB).subs(zero).applyfunc(_reduce)
+    return own + (sp.cos(beta_b) / length) * (across @ across.T)
 
 
 def kernels() -> list[Kernel]:
@@ -127,6 +161,13 @@ def kernels() -> list[Kernel]:
             [d["jacobian"]],
             "Jacobian dd/d[q_a; q_b] (12,) of the flank gap at q = 0 (DESIGN 2.2).\n\n"
             "Spur front flank: Lin & Parker 1999 d_sn, d_rn (u_j = r_j theta_j).",
+        ),
+        Kernel(
+            "mesh_gap_curvature",
+            geo,
+            [d["curvature"]],
+            "Curvature (12, 12) at q = 0 of the flank's belt gap d2 (module docstring): a flank\n"
+            "carrying the force f adds f times it to the stiffness (DESIGN 2.5a).",
         ),
     ]
 

@@ -419,3 +419,152 @@ def test_bearing_gaps_dead_band_and_jacobians(geo) -> None:
             fd[:, k] = (joint.bearing_gaps(*a_p, *geo, *clear)
                         - joint.bearing_gaps(*a_m, *geo, *clear)) / (2 * h)
         np.testing.assert_allclose(J, fd, rtol=0, atol=1e-8)
+
+
+# ------------------------------------------------ curvatures (DESIGN 2.5a: geometric stiffness)
+
+
+def _Rs(r) -> np.ndarray:
+    """Rx(rx) Ry(ry) Rz(rz) in numpy (symbolic/rotations.py's convention)."""
+    (cx, sx), (cy, sy), (cz, sz) = ((np.cos(a), np.sin(a)) for a in r)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rx @ ry @ rz
+
+
+def _rz(a) -> np.ndarray:
+    return _Rs((0.0, 0.0, a))
+
+
+def _hessian(f, n=12, h=1e-4) -> np.ndarray:
+    """Central second differences of ``f`` (R^n -> R): truncation h^2 |f''''| / 12 ~ 1e-9 and
+    rounding ~ 1e-16 / h^2 ~ 1e-8 for entries of order 1 (offsets below 1 m)."""
+    H = np.zeros((n, n))
+    I = np.eye(n) * h
+    for i in range(n):
+        for j in range(i, n):
+            H[i, j] = H[j, i] = (f(I[i] + I[j]) - f(I[i] - I[j]) - f(I[j] - I[i])
+                                 + f(-I[i] - I[j])) / (4 * h * h)
+    return H
+
+
+def _joint_in_x_axes(q, pa, pb, gamma) -> np.ndarray:
+    """The joint deflection in axes turning with a body x (symbolic/joint.py), in numpy;
+    ``q = [q_a; q_b; r_x]``."""
+    ua, ra, ub, rb, rx = q[:3], q[3:6], q[6:9], q[9:12], q[12:15]
+    d = (ua + (_Rs(ra) - np.eye(3)) @ pa) - (ub + (_Rs(rb) - np.eye(3)) @ pb)
+    E = _rz(gamma)
+    return np.r_[E.T @ _Rs(rx).T @ d, E.T @ (ra - rb)]
+
+
+@pytest.mark.parametrize("geo", JOINT_GEOMETRIES)
+def test_joint_curvatures_finite_differences(geo) -> None:
+    pa, pb, gamma = np.array(geo[:3]), np.array(geo[3:6]), geo[6]
+    H = joint.joint_curvatures(*geo).reshape(6, 15, 15)
+    for i in range(6):
+        fd = _hessian(lambda q, i=i: _joint_in_x_axes(q, pa, pb, gamma)[i], n=15)
+        np.testing.assert_allclose(H[i], fd, rtol=0, atol=1e-6)
+    # its first derivatives are the joint's own (the same linear stiffness), none in r_x
+    Ga, Gb = joint.joint_gradients(*geo)
+    h = 1e-6
+    fd = np.array([(_joint_in_x_axes(h * e, pa, pb, gamma)
+                    - _joint_in_x_axes(-h * e, pa, pb, gamma)) / (2 * h) for e in np.eye(15)])
+    np.testing.assert_allclose(np.hstack([Ga, Gb, np.zeros((6, 3))]), fd.T, rtol=0, atol=1e-8)
+
+
+def _belt_gap(q, geo) -> float:
+    """The belt gap (symbolic/mesh.py) in numpy: the change of distance between the base
+    circles' tangent points in the transverse plane, the axial part along the helix."""
+    cax, cay, cbx, cby, rba, rbb, alpha, beta, side, internal = geo
+    ca, cb = np.array([cax, cay, 0.0]), np.array([cbx, cby, 0.0])
+    e = (cb - ca) / np.linalg.norm(cb - ca)
+    sigma = 1 - 2 * internal
+    n_t = _rz(side * (np.pi / 2 - sigma * alpha)) @ e
+    radial = _rz(-side * np.pi / 2) @ n_t
+    pa, pb = rba * radial, -sigma * rbb * radial
+    ua, ra, ub, rb = q[:3], q[3:6], q[6:9], q[9:12]
+    da = ua + (_Rs(ra) - np.eye(3)) @ pa
+    db = ub + (_Rs(rb) - np.eye(3)) @ pb
+    ell = (ca + pa - cb - pb) @ n_t
+    span = (ca + pa + da - cb - pb - db)[:2]
+    return float(np.cos(beta) * np.sign(ell) * (np.hypot(*span) - abs(ell))
+                 - side * np.sin(beta) * (da - db)[2])
+
+
+BELT_GEOMETRIES = [
+    _sun_planet(0.4, beta=np.deg2rad(15.0)),
+    _sun_planet(2.2, side=-1.0, beta=np.deg2rad(-12.0), c0=(0.1, 0.05)),
+    _ring_planet(1.1, beta=np.deg2rad(15.0)),
+    _ring_planet(5.0, side=-1.0, beta=np.deg2rad(-8.0), c0=(-0.2, 0.3)),
+]
+
+
+@pytest.mark.parametrize("geo", BELT_GEOMETRIES)
+def test_mesh_curvature_is_the_belt_gaps(geo) -> None:
+    """The belt gap's gradient is the flank's Jacobian, its Hessian the generated curvature
+    (where the radii, centre distance and pressure angle agree, as gm.Gear's do)."""
+    h = 1e-6
+    fd = np.array([(_belt_gap(h * e, geo) - _belt_gap(-h * e, geo)) / (2 * h)
+                   for e in np.eye(12)])
+    np.testing.assert_allclose(mesh.mesh_gap_jacobian(*geo), fd, rtol=0, atol=1e-8)
+    # the second differences' truncation, h^2 |f| / 12 with |f| up to r / l^3 ~ 1e3
+    # (the belt's span l ~ 0.05 m here): ~1e-6 absolute, ~(h / l)^2 relative
+    np.testing.assert_allclose(mesh.mesh_gap_curvature(*geo),
+                               _hessian(lambda q: _belt_gap(q, geo)), rtol=1e-5, atol=1e-5)
+
+
+@pytest.mark.parametrize("internal", [0.0, 1.0])
+def test_mesh_curvature_follows_the_involute_law(internal) -> None:
+    """An independent law: the compression of an involute pair against its centre distance
+    ``a`` is ``-+(rba -+ rbb)(inv(alpha_w) - inv(alpha))``, ``cos(alpha_w) = (rba -+ rbb) / a``
+    (external / internal); its second derivative at ``a`` is ``-+cos^2(alpha) / (a
+    sin(alpha))``. Moving wheel b along the centre line must meet it."""
+    geo = _ring_planet(0.7) if internal else _sun_planet(0.7)
+    rba, rbb = geo[4], geo[5]
+    R = rba - rbb if internal else rba + rbb
+    ca, cb = np.array(geo[:2]), np.array(geo[2:4])
+    a0 = np.linalg.norm(cb - ca)
+    e = (cb - ca) / a0
+    sign = 1.0 if internal else -1.0
+
+    def inv(a):
+        al = np.arccos(R / a)
+        return np.tan(al) - al
+
+    h = 1e-5
+    law = sign * R * (inv(a0 + h) - 2 * inv(a0) + inv(a0 - h)) / h**2
+    assert law == pytest.approx(sign * np.cos(ALPHA) ** 2 / (a0 * np.sin(ALPHA)), rel=1e-6)
+    H = mesh.mesh_gap_curvature(*geo)
+    assert e @ H[6:8, 6:8] @ e == pytest.approx(law, rel=1e-6)
+    # its slope, the Jacobian's radial entry, is the law's first derivative sign * sin(alpha)
+    assert mesh.mesh_gap_jacobian(*geo)[6:8] @ e == pytest.approx(sign * np.sin(ALPHA), rel=1e-12)
+
+
+@pytest.mark.parametrize("geo", BELT_GEOMETRIES)
+def test_mesh_and_joint_curvatures_keep_a_rigid_rotation_free(geo) -> None:
+    """Both wheels (or joint bodies, with the body x their axes turn with) turned rigidly by
+    theta about the stage axis: the exact displacement is ``u = (Rz(theta) - I) c``, ``r =
+    theta z``; to second order a deflection then changes by ``J q2 + q1 H q1 / 2`` (``q1``
+    the linear part ``theta z x c``, ``q2`` the rest), which must vanish: the residual is
+    third order (shrinks 1000-fold per 10-fold smaller theta), while either term alone is
+    second order."""
+    ca, cb = np.array([geo[0], geo[1], 0.0]), np.array([geo[2], geo[3], 0.0])
+    J, H = mesh.mesh_gap_jacobian(*geo), mesh.mesh_gap_curvature(*geo)
+    Gj = np.hstack([*joint.joint_gradients(0.1, 0.2, 0.0, *(ca[:2] - cb[:2] + [0.1, 0.2]),
+                                           0.0, 0.7), np.zeros((6, 3))])
+    Hj = joint.joint_curvatures(0.1, 0.2, 0.0, *(ca[:2] - cb[:2] + [0.1, 0.2]), 0.0, 0.7)
+    res, res_j = [], []
+    for th in (1e-2, 1e-3):
+        z = np.array([0.0, 0.0, th])
+        q1 = np.r_[np.cross(z, ca), z, np.cross(z, cb), z]
+        q2 = np.r_[(_rz(th) - np.eye(3)) @ ca, z, (_rz(th) - np.eye(3)) @ cb, z] - q1
+        res.append(abs(J @ q2 + 0.5 * q1 @ H @ q1))
+        assert abs(0.5 * q1 @ H @ q1) > 100 * res[-1]
+        # the joint between the two centres' points (ca + p = cb + p'), each direction
+        qx1, qx2 = np.r_[q1, z], np.r_[q2, np.zeros(3)]
+        quad = np.einsum("j,ijk,k->i", qx1, Hj.reshape(6, 15, 15), qx1) / 2
+        res_j.append(np.abs(Gj @ qx2 + quad).max())
+        assert np.abs(quad).max() > 100 * res_j[-1]
+    assert res[1] < 2e-3 * res[0]
+    assert res_j[1] < 2e-3 * res_j[0]

@@ -7,7 +7,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ['joint_residual', 'joint_gradients', 'joint_gradients_at', 'bearing_gaps', 'bearing_gap_jacobians']
+__all__ = ['joint_residual', 'joint_gradients', 'joint_gradients_at', 'joint_curvatures', 'bearing_gaps', 'bearing_gap_jacobians']
 
 
 @numba.njit(cache=True)
@@ -248,6 +248,207 @@ def joint_gradients_at(qa, qb, pax, pay, paz, pbx, pby, pbz, gamma):
     Gb[4, 4] = x25
     Gb[5, 5] = -1
     return Ga, Gb
+
+
+@numba.njit(cache=True)
+def joint_curvatures(pax, pay, paz, pbx, pby, pbz, gamma):
+    """Curvatures (90, 15) at q = 0 of the joint deflection in axes turning with a body x
+    (module docstring): rows 15 i .. 15 i + 14 are d2 g^x_i / d[q_a; q_b; r_x]^2 of
+    direction i (x, y, z, rx, ry, theta); a force f_i carried in direction i adds f_i
+    times it to the stiffness (DESIGN 2.5a).
+
+    Arguments:
+        pax: x of the offset from a's centre to the joint point (global axes)
+        pay: y of the offset from a's centre
+        paz: z of the offset from a's centre
+        pbx: x of the offset from b's centre to the joint point
+        pby: y of the offset from b's centre
+        pbz: z of the offset from b's centre
+        gamma: joint axes angle: e1 = Rz(gamma) x_hat, e2 = Rz(gamma) y_hat, e3 = z_hat
+    """
+    x0 = math.sin(gamma)
+    x1 = -x0
+    x2 = math.cos(gamma)
+    x3 = -x2
+    x4 = pay*x0
+    x5 = pax*x0
+    x6 = pay*x2
+    x7 = -x6
+    x8 = -paz*x2
+    x9 = pax*x2
+    x10 = -x9
+    x11 = -x5
+    x12 = paz*x0
+    x13 = -x12
+    x14 = x4 + x9
+    x15 = pby*x0
+    x16 = pbx*x0
+    x17 = -x16
+    x18 = -x15
+    x19 = pby*x2
+    x20 = pbz*x2
+    x21 = pbx*x2
+    x22 = -x21
+    x23 = pbz*x0
+    x24 = x15 + x21
+    x25 = -x24
+    x26 = x5 + x7
+    x27 = -x26
+    x28 = -x19
+    x29 = -x23
+    x30 = x16 + x28
+    x31 = -paz
+    x32 = -pax
+    x33 = -pay
+    x34 = -pbx
+    x35 = -pbz
+    x36 = -pby
+    out = np.zeros((90, 15))
+    out[0, 14] = x1
+    out[1, 14] = x2
+    out[2, 12] = x0
+    out[2, 13] = x3
+    out[3, 3] = -x4
+    out[3, 4] = x5
+    out[3, 12] = x4
+    out[3, 13] = x7
+    out[3, 14] = x8
+    out[4, 3] = x5
+    out[4, 4] = x10
+    out[4, 12] = x11
+    out[4, 13] = x9
+    out[4, 14] = x13
+    out[5, 5] = -x14
+    out[5, 14] = x14
+    out[6, 14] = x0
+    out[7, 14] = x3
+    out[8, 12] = x1
+    out[8, 13] = x2
+    out[9, 9] = x15
+    out[9, 10] = x17
+    out[9, 12] = x18
+    out[9, 13] = x19
+    out[9, 14] = x20
+    out[10, 9] = x17
+    out[10, 10] = x21
+    out[10, 12] = x16
+    out[10, 13] = x22
+    out[10, 14] = x23
+    out[11, 11] = x24
+    out[11, 14] = x25
+    out[12, 2] = x0
+    out[12, 3] = x4
+    out[12, 4] = x11
+    out[12, 8] = x1
+    out[12, 9] = x18
+    out[12, 10] = x16
+    out[13, 2] = x3
+    out[13, 3] = x7
+    out[13, 4] = x9
+    out[13, 8] = x2
+    out[13, 9] = x19
+    out[13, 10] = x22
+    out[14, 0] = x1
+    out[14, 1] = x2
+    out[14, 3] = x8
+    out[14, 4] = x13
+    out[14, 5] = x14
+    out[14, 6] = x0
+    out[14, 7] = x3
+    out[14, 9] = x20
+    out[14, 10] = x23
+    out[14, 11] = x25
+    out[15, 14] = x3
+    out[16, 14] = x1
+    out[17, 12] = x2
+    out[17, 13] = x0
+    out[18, 3] = x7
+    out[18, 4] = x9
+    out[18, 12] = x6
+    out[18, 13] = x4
+    out[18, 14] = x12
+    out[19, 3] = x9
+    out[19, 4] = x5
+    out[19, 12] = x10
+    out[19, 13] = x11
+    out[19, 14] = x8
+    out[20, 5] = x26
+    out[20, 14] = x27
+    out[21, 14] = x2
+    out[22, 14] = x0
+    out[23, 12] = x3
+    out[23, 13] = x1
+    out[24, 9] = x19
+    out[24, 10] = x22
+    out[24, 12] = x28
+    out[24, 13] = x18
+    out[24, 14] = x29
+    out[25, 9] = x22
+    out[25, 10] = x17
+    out[25, 12] = x21
+    out[25, 13] = x16
+    out[25, 14] = x20
+    out[26, 11] = -x30
+    out[26, 14] = x30
+    out[27, 2] = x2
+    out[27, 3] = x6
+    out[27, 4] = x10
+    out[27, 8] = x3
+    out[27, 9] = x28
+    out[27, 10] = x21
+    out[28, 2] = x0
+    out[28, 3] = x4
+    out[28, 4] = x11
+    out[28, 8] = x1
+    out[28, 9] = x18
+    out[28, 10] = x16
+    out[29, 0] = x3
+    out[29, 1] = x1
+    out[29, 3] = x12
+    out[29, 4] = x8
+    out[29, 5] = x27
+    out[29, 6] = x2
+    out[29, 7] = x0
+    out[29, 9] = x29
+    out[29, 10] = x20
+    out[29, 11] = x30
+    out[30, 13] = 1
+    out[31, 12] = -1
+    out[33, 3] = x31
+    out[33, 5] = pax
+    out[33, 12] = paz
+    out[34, 4] = x31
+    out[34, 5] = pay
+    out[34, 13] = paz
+    out[35, 3] = pax
+    out[35, 4] = pay
+    out[35, 12] = x32
+    out[35, 13] = x33
+    out[36, 13] = -1
+    out[37, 12] = 1
+    out[39, 9] = pbz
+    out[39, 11] = x34
+    out[39, 12] = x35
+    out[40, 10] = pbz
+    out[40, 11] = x36
+    out[40, 13] = x35
+    out[41, 9] = x34
+    out[41, 10] = x36
+    out[41, 12] = pbx
+    out[41, 13] = pby
+    out[42, 1] = -1
+    out[42, 3] = paz
+    out[42, 5] = x32
+    out[42, 7] = 1
+    out[42, 9] = x35
+    out[42, 11] = pbx
+    out[43, 0] = 1
+    out[43, 4] = paz
+    out[43, 5] = x33
+    out[43, 6] = -1
+    out[43, 10] = x35
+    out[43, 11] = pby
+    return out
 
 
 @numba.njit(cache=True)

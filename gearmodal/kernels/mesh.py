@@ -7,7 +7,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ['mesh_gap', 'mesh_gap_jacobian']
+__all__ = ['mesh_gap', 'mesh_gap_jacobian', 'mesh_gap_curvature']
 
 
 @numba.njit(cache=True)
@@ -135,4 +135,111 @@ def mesh_gap_jacobian(cax, cay, cbx, cby, rba, rbb, alpha, beta_b, side, interna
     out[9] = x21*(x4*x6 - x4 + x5)
     out[10] = x21*(-x13*x6 + x14)
     out[11] = rbb*x20*(1 - x6)
+    return out
+
+
+@numba.njit(cache=True)
+def mesh_gap_curvature(cax, cay, cbx, cby, rba, rbb, alpha, beta_b, side, internal):
+    """Curvature (12, 12) at q = 0 of the flank's belt gap d2 (module docstring): a flank
+    carrying the force f adds f times it to the stiffness (DESIGN 2.5a).
+
+    Arguments:
+        cax: x of the centre of wheel a (global axes)
+        cay: y of the centre of wheel a
+        cbx: x of the centre of wheel b
+        cby: y of the centre of wheel b
+        rba: base radius of wheel a
+        rbb: base radius of wheel b
+        alpha: transverse pressure angle
+        beta_b: base helix angle (signed)
+        side: +1.0 or -1.0: line of action (front flank side s, back flank -s)
+        internal: 0.0 external pair; 1.0 when a is an internal gear (ring) and b inside it
+    """
+    x0 = math.sin(alpha)
+    x1 = -cay + cby
+    x2 = x0*x1
+    x3 = -cax + cbx
+    x4 = math.cos(alpha)
+    x5 = side*x4
+    x6 = x2 + x3*x5
+    x7 = -2*internal*x0*x1 + x6
+    x8 = -x7
+    x9 = math.cos(beta_b)
+    x10 = 2*internal
+    x11 = x1**2
+    x12 = x11 + x3**2
+    x13 = x9/(x0*x12**(1.5)*(x10 - 1))
+    x14 = x1*x5
+    x15 = x0*x3
+    x16 = -x0*x3 + x10*x15 + x14
+    x17 = -x16
+    x18 = x13*x8
+    x19 = x17*x18
+    x20 = x18*x7
+    x21 = x16*x18
+    x22 = x13*x17
+    x23 = x22*x7
+    x24 = x16*x22
+    x25 = x0*x4
+    x26 = 1/x12
+    x27 = 4*internal*x26
+    x28 = x11*x27
+    x29 = side*x26
+    x30 = x1*x3
+    x31 = x29*x30
+    x32 = 2*x26
+    x33 = x11*x32
+    x34 = side*x4**2
+    x35 = x30*x34
+    x36 = -x25*x33 + x25 + x31 - x32*x35
+    x37 = -x10*x25 + x25*x28 + x36
+    x38 = rba*x9
+    x39 = x2*x3*x4
+    x40 = x11*x29
+    x41 = x32*x39 - x33*x34 + x34 + x40
+    x42 = x38*(-x27*x39 + x41)
+    x43 = math.sin(beta_b)/math.sqrt(x12)
+    x44 = rba*x43
+    x45 = x44*x8
+    x46 = x17*x44
+    x47 = x13*x16*x7
+    x48 = -x10*x31 + x27*x35 + x36
+    x49 = rbb*x9
+    x50 = x49*(-x10*x34 - x10*x40 + x28*x34 + x41)
+    x51 = rbb*x43
+    x52 = x51*(2*internal*side*x3*x4 - x6)
+    x53 = x51*(x10*x14 - x14 + x15)
+    out = np.zeros((12, 12))
+    out[0, 0] = x13*x8**2
+    out[0, 1] = x19
+    out[0, 6] = x20
+    out[0, 7] = x21
+    out[1, 0] = x19
+    out[1, 1] = x13*x17**2
+    out[1, 6] = x23
+    out[1, 7] = x24
+    out[3, 3] = x37*x38
+    out[3, 4] = x42
+    out[3, 5] = x45
+    out[4, 3] = x42
+    out[4, 4] = -x37*x38
+    out[4, 5] = x46
+    out[5, 3] = x45
+    out[5, 4] = x46
+    out[6, 0] = x20
+    out[6, 1] = x23
+    out[6, 6] = x13*x7**2
+    out[6, 7] = x47
+    out[7, 0] = x21
+    out[7, 1] = x24
+    out[7, 6] = x47
+    out[7, 7] = x13*x16**2
+    out[9, 9] = x48*x49
+    out[9, 10] = x50
+    out[9, 11] = x52
+    out[10, 9] = x50
+    out[10, 10] = -x48*x49
+    out[10, 11] = x53
+    out[11, 9] = x52
+    out[11, 10] = x53
     return out
