@@ -13,6 +13,30 @@ Every contact (a flank of a mesh, one side of a bearing dead band) ``e`` has a p
     K_s = sum_active k_e W_e^T W_e,   C_s = sum_active c_e W_e^T W_e,
     f_s = sum_active k_e offset_e W_e
 
+Geometric stiffness (DESIGN 2.5a). The steady rotation loads the elements: the centrifugal
+forces ``Omega^2 f_cent`` of bodies off the axis (the planets) are carried by their bearings
+and meshes. A loaded element whose deflection is curved in the coordinates adds the curvature
+times its force to the linearised stiffness, as a tensioned blade stiffens::
+
+    (G1)  (K + K_s) q_1 = f_cent,   lambda_e = k_e W_e q_1     (per (rad/s)^2; springs and
+                                                                 nominally active contacts)
+    (G2)  K_geom = sum_e lambda_e H_e,   H_e = d2 p_e / dq dq
+
+with ``H_e`` the curvature of the element's deflection and ``K_cent`` the centripetal softening
+plus ``K_geom``. A mesh flank's deflection is mesh.py's belt gap; a joint's (joint.py) is
+measured in axes turning with the body the load turns with: the carrier whose frame its body
+is in (the planets' centrifugal load, and an unbalanced carrier's, turns with it), else its
+body ``b``, else the ground's fixed axes. Measured so, every loaded deflection is invariant
+under the free motions of the steadily turning drivetrain (a rigid rotation of the whole, the
+carrier advanced in a held ring) at any configuration near the nominal one, so ``H_e xi =
+-A^T W_e`` along such a motion ``xi`` (``A`` its rotation generator) and ``K_geom xi = -A^T
+f_cent``: exactly the centripetal softening's ``-K_cent,centripetal xi``. The free motion is
+then an exact zero of the stiffness at every speed, as physics has; without ``K_geom`` (Lin &
+Parker 1999, whose centripetal-only form ``K_cent - K_geom`` keeps) it has a real positive
+eigenvalue at speed. The loads of (G1) are those of the steady rotation alone (not the
+torque's, nor a clearance's offset), solved in the nominal contact state by least squares
+(the free rotation carries no centrifugal force).
+
 The kernels used here are generated from ``symbolic/`` (floating-frame wheel: ``wheel.py``;
 flank gaps: ``mesh.py``; joint/bearing deflections: ``joint.py``). Coefficients that rotate with a
 frame against fixed supports are frozen at the input azimuth given to :func:`assemble`.
@@ -178,7 +202,12 @@ class Assembly:
     dof_names, load_names : names of the state and load vectors.
     M : mass matrix. C, K : damping and stiffness of the always-active elements.
     G : gyroscopic matrix per rad/s of input speed (skew-symmetric).
-    K_cent : centripetal stiffness per (rad/s)^2 (softening, negative semi-definite).
+    K_cent : the steady rotation's stiffness per (rad/s)^2, which every solver scales by the
+        speed squared: the bodies' centripetal softening (negative semi-definite) plus the
+        geometric stiffness ``K_geom``.
+    K_geom : the geometric stiffness per (rad/s)^2 included in ``K_cent`` (module docstring,
+        (G1)-(G2)); ``K_cent - K_geom`` is the centripetal-only linearisation of Lin & Parker
+        (1999) (``geometric_stiffness=False`` in :func:`gearmodal.modal`).
     f_cent : centrifugal force per (rad/s)^2.
     B : load map, generalised force = ``B @ u`` for the load values ``u`` (N, N m).
     contacts : the unilateral contacts (:class:`Contacts`).
@@ -205,6 +234,16 @@ class Assembly:
     #: the input body's rotation rate per state velocity (n,): its absolute speed is the
     #: input speed plus ``input_speed @ v`` (None: the model names no input)
     input_speed: np.ndarray | None = None
+    K_geom: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.K_geom is None:
+            self.K_geom = np.zeros_like(self.K_cent)
+
+    def speed_stiffness(self, geometric_stiffness: bool = True) -> np.ndarray:
+        """The stiffness per (rad/s)^2 of the steady rotation: ``K_cent``, or without the
+        geometric stiffness ``K_cent - K_geom`` (Lin & Parker's centripetal-only form)."""
+        return self.K_cent if geometric_stiffness else self.K_cent - self.K_geom
 
     def reduction(self) -> tuple[Assembly, np.ndarray | None]:
         """``(assembly to solve, N)``: ``(self, None)``; a coupled assembly answers its
@@ -439,6 +478,8 @@ class Contributions:
         self.f_cent = np.zeros(n)
         self.contacts, self.springs, self.round = _Rows(), _Rows(), _Rows()
         self.kinds: list[str] = []  # of the contacts: "mesh", "bearing"
+        #: the springs and nominally active contacts whose rows are curved: (w, k, idx, H)
+        self.curved: list[tuple] = []
         self._transforms: dict = {}
         self._centres: dict = {}
 
@@ -470,15 +511,39 @@ class Contributions:
             w[self.slices[body.name]] += J @ T
         return w
 
+    def curvature(self, parts) -> tuple[np.ndarray, np.ndarray] | None:
+        """A row's curvature in the state, from ``([(body, rows), ...], H)``: ``H`` the Hessian
+        of the row in the listed parts of the bodies' global 6-vectors, side by side (``rows``
+        a slice of a body's ``(ux, uy, uz, rx, ry, rz)``; a body may appear in several parts).
+        Returns ``(idx, T^T H T)`` on the state indices ``idx`` of those bodies' coordinates,
+        or None when it is zero."""
+        blocks, H6 = parts
+        if not np.any(H6):
+            return None
+        bodies = list(dict.fromkeys(b.name for b, _ in blocks))
+        idx = np.concatenate([np.arange(self.n)[self.slices[b]] for b in bodies])
+        start = dict(zip(bodies, np.cumsum([0] + [len(np.arange(self.n)[self.slices[b]])
+                                                 for b in bodies]), strict=False))
+        T = np.zeros((H6.shape[0], len(idx)))
+        row = 0
+        for body, rows in blocks:
+            t = self.transform(body)[rows]
+            c0 = start[body.name]
+            T[row:row + t.shape[0], c0:c0 + t.shape[1]] += t
+            row += t.shape[0]
+        H = T.T @ H6 @ T
+        return (idx, H) if np.any(H) else None
+
     def contact(self, w, offset: float, k: float, c: float, nominal: bool, element,
                 label: str, kind: str, *, columns, angle: float = np.nan,
-                variation=None, waves=()) -> int:
+                variation=None, waves=(), curvature=None) -> int:
         """A unilateral contact of ``element``: penetration ``w q - offset``, force
         ``k p + c p'`` while ``p > 0``, added with ``weight`` to each result force column of
         ``columns`` (``[(column, weight), ...]``); ``variation`` an alternating stiffness
         ``(rate, phase, double, k_single, k_double)``; ``waves`` ``[(h, z), ...]`` offset
         terms ``Re(z e^(i h psi))`` (:class:`OffsetWaves`; ``offset`` includes their value at
-        this azimuth). Returns the contact's row."""
+        this azimuth); ``curvature`` the row's ``([bodies], H6)`` (:meth:`curvature`), for the
+        geometric stiffness of the force it carries. Returns the contact's row."""
         rows = self.contacts  # _Rows.add inlined: polygons add hundreds of rows
         if element is not rows._element:
             rows._element, rows._meta = element, _structure(element)
@@ -491,11 +556,22 @@ class Contributions:
             rows.variation.append((i, *variation))
         for h, z in waves:
             rows.waves.append((i, h, z))
+        if curvature is not None and nominal:
+            self._curved(w, k, curvature)
         return i
 
-    def spring(self, w, k: float, c: float, element, direction: str, acts: bool) -> None:
+    def _curved(self, w, k: float, curvature) -> None:
+        got = self.curvature(curvature)
+        if got is not None:
+            self.curved.append((w, k, *got))
+
+    def spring(self, w, k: float, c: float, element, direction: str, acts: bool,
+               curvature=None) -> None:
         """An always-active spring-damper on the deflection ``w q``: ``k w w^T`` and
-        ``c w w^T``; listed (for its force column ``<element>.<direction>``) if it ``acts``."""
+        ``c w w^T``; listed (for its force column ``<element>.<direction>``) if it ``acts``;
+        ``curvature`` as for :meth:`contact`."""
+        if curvature is not None:
+            self._curved(w, k, curvature)
         ww = np.outer(w, w)
         self.K += k * ww
         if c:
@@ -557,12 +633,30 @@ def assemble(model, azimuth: float = 0.0) -> Assembly:
     B = np.array(cols).T if cols else np.zeros((n, 0))
     contacts = ctx.contacts.contacts(ctx.kinds, n)
     springs = ctx.springs.contacts("spring", n)
+    K_geom = _geometric_stiffness(ctx, contacts)
     nr = len(ctx.round)
     round_ = ctx.round.contacts("round", n) if nr else None
     return Assembly(dof_names=model.dof_names, load_names=load_names, M=ctx.M, C=ctx.C,
-                    K=ctx.K, G=ctx.G, K_cent=ctx.K_cent, f_cent=ctx.f_cent, B=B,
+                    K=ctx.K, G=ctx.G, K_cent=ctx.K_cent + K_geom, f_cent=ctx.f_cent, B=B,
                     contacts=contacts, azimuth=azimuth, body_slices=slices, springs=springs,
-                    round=round_, input_speed=_input_speed(model, slices, n))
+                    round=round_, input_speed=_input_speed(model, slices, n), K_geom=K_geom)
+
+
+def _geometric_stiffness(ctx: Contributions, contacts: Contacts) -> np.ndarray:
+    """``K_geom`` per (rad/s)^2, (G1)-(G2) of the module docstring."""
+    n = ctx.n
+    K_geom = np.zeros((n, n))
+    if not ctx.curved or not np.any(ctx.f_cent):
+        return K_geom
+    s = contacts.nominal
+    W = contacts.W[s]
+    Ks = ctx.K + (W.T * contacts.stiffness[s]) @ W
+    q1 = np.linalg.lstsq(Ks, ctx.f_cent, rcond=None)[0]  # (G1)
+    for w, k, idx, H in ctx.curved:  # (G2)
+        force = k * float(w @ q1)
+        if force:
+            K_geom[np.ix_(idx, idx)] += force * H
+    return 0.5 * (K_geom + K_geom.T)
 
 
 def _input_speed(model, slices: dict, n: int) -> np.ndarray | None:
@@ -641,6 +735,7 @@ def _on_pins(model, pinned: list[str], azimuth: float) -> Assembly:
     return Assembly(dof_names=[full.dof_names[i] for i in idx],
                     load_names=[full.load_names[j] for j in cols], M=proj(full.M),
                     C=proj(full.C), K=proj(full.K), G=proj(full.G), K_cent=proj(full.K_cent),
+                    K_geom=proj(full.K_geom),
                     f_cent=proj(full.f_cent, right=False), B=proj(full.B[:, cols], right=False),
                     contacts=red(full.contacts), azimuth=azimuth,
                     body_slices=slices, springs=red(full.springs), round=red(full.round),

@@ -439,7 +439,7 @@ def _plain(x):
 
 def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state=None,
              progress=None, n_modes: int | None = None,
-             fmax_hz: float | None = None) -> CampbellResult:
+             fmax_hz: float | None = None, geometric_stiffness: bool = True) -> CampbellResult:
     """Natural frequencies of ``model`` over input speeds ``speeds_rpm`` (rpm), MAC-tracked.
 
     Parameters
@@ -460,6 +460,11 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
         problem projected on twice as many undamped modes of each contact state
         (:func:`gearmodal.modal.band_solve`: an approximation, its error against the full
         solve measured); default: every mode, solved in full.
+    geometric_stiffness : the stiffness of the steady rotation's internal forces (the planet
+        bearings' and meshes' centrifugal preload, :mod:`gearmodal.assembly`), which keeps a
+        free drivetrain's rigid rotation neutral at every speed (default). ``False`` solves
+        Lin & Parker's (1999) centripetal-only linearisation, whose rigid rotation turns into
+        a real positive eigenvalue at speed (as published; reproduce their diagrams with it).
     """
     from .coupling import Coupled
 
@@ -485,6 +490,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
         states = [asm.state(state)] * s.size
     n = red.n
     M = red.M
+    Kc = red.speed_stiffness(bool(geometric_stiffness))
     solvers: dict[bytes, object] = {}
     check_band(n_modes, fmax_hz)
     band = n_modes is not None or fmax_hz is not None
@@ -500,7 +506,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
             V = band_basis(M, red.stiffness(st), n_modes) if band else None
             if V is None:
                 solvers[key] = (None, _sweep_solver(M, red.damping(st), red.stiffness(st),
-                                                    red.G, red.K_cent))
+                                                    red.G, Kc))
             else:  # the band: the problem projected on the state's basis, solved per speed
 
                 def pr(X):
@@ -508,7 +514,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
 
                 solvers[key] = (V, _sweep_solver(pr(M), pr(red.damping(st)),
                                                  pr(red.stiffness(st)), pr(red.G),
-                                                 pr(red.K_cent)))
+                                                 pr(Kc)))
         V, solve = solvers[key]
         lam, phi = solve(om)
         if V is not None:

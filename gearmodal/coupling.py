@@ -384,6 +384,7 @@ class CoupledAssembly(Assembly):
                 dof_names=[self.dof_names[i] for i in self.independent],
                 load_names=list(self.load_names), M=N.T @ self.M @ N, C=N.T @ self.C @ N,
                 K=N.T @ self.K @ N, G=N.T @ self.G @ N, K_cent=N.T @ self.K_cent @ N,
+                K_geom=N.T @ self.K_geom @ N,
                 f_cent=N.T @ self.f_cent, B=N.T @ self.B, contacts=red(self.contacts),
                 azimuth=self.azimuth, body_slices={}, springs=red(self.springs),
                 round=red(self.round))
@@ -584,7 +585,7 @@ class Coupled:
             return out
 
         M, C, K = grow(base.M, n, n), grow(base.C, n, n), grow(base.K, n, n)
-        G, Kc = grow(base.G, n, n), grow(base.K_cent, n, n)
+        G, Kc, Kg = grow(base.G, n, n), grow(base.K_cent, n, n), grow(base.K_geom, n, n)
         B = grow(base.B, n, len(loads))
         fc = np.concatenate([base.f_cent, np.zeros(n - n0)])
         names = list(base.dof_names)
@@ -613,7 +614,8 @@ class Coupled:
         _, Gc = self.constraint_rows()
         N, ind = self._basis(Gc)
         return CoupledAssembly(
-            dof_names=names, load_names=loads, M=M, C=C, K=K, G=G, K_cent=Kc, f_cent=fc, B=B,
+            dof_names=names, load_names=loads, M=M, C=C, K=K, G=G, K_cent=Kc, K_geom=Kg,
+            f_cent=fc, B=B,
             contacts=pad(base.contacts), azimuth=azimuth, body_slices=slices,
             springs=pad(base.springs), round=pad(base.round), Gc=Gc, N=N, independent=ind,
             constraint_names=[f"{c.name}.{d}" for c in self.constraints

@@ -445,7 +445,7 @@ def band_solve(V, M, C, K, G=None, speed=0.0, Kc=None):
 
 def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=None,
           labels: dict | None = None, n_modes: int | None = None,
-          fmax_hz: float | None = None) -> ModalResult:
+          fmax_hz: float | None = None, geometric_stiffness: bool = True) -> ModalResult:
     """Natural frequencies, damping ratios and mode shapes of ``model`` at ``speed_rpm``.
 
     Parameters
@@ -464,6 +464,11 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
         (:func:`band_solve`: an approximation, its error measured against the full solve:
         at most 2e-6 relative on the 600 kW drivetrain's lowest 5 to 15 modes at 22.1 rpm);
         default: every mode, solved in full.
+    geometric_stiffness : include the stiffness of the steady rotation's internal forces (the
+        planets' centrifugal preload on their bearings and meshes, :mod:`gearmodal.assembly`),
+        which keeps a free drivetrain's rigid rotation neutral at every speed (default);
+        ``False``: Lin & Parker's (1999) centripetal-only linearisation, as published (its
+        rigid rotation has a real positive eigenvalue at speed).
 
     Examples
     --------
@@ -494,12 +499,11 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     V = None
     if n_modes is not None or fmax_hz is not None:
         V = band_basis(red.M, red.stiffness(s), n_modes, fmax_hz)
+    Kc = red.speed_stiffness(bool(geometric_stiffness))
     if V is None:
-        lam, shapes = eigensolve(red.M, red.damping(s), red.stiffness(s), red.G, om,
-                                 red.K_cent)
+        lam, shapes = eigensolve(red.M, red.damping(s), red.stiffness(s), red.G, om, Kc)
     else:
-        lam, shapes = band_solve(V, red.M, red.damping(s), red.stiffness(s), red.G, om,
-                                 red.K_cent)
+        lam, shapes = band_solve(V, red.M, red.damping(s), red.stiffness(s), red.G, om, Kc)
     keep = np.ones(lam.size, dtype=bool)
     if fmax_hz is not None:
         keep &= np.abs(lam) <= 2 * math.pi * fmax_hz

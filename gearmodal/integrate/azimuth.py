@@ -31,7 +31,7 @@ DEGREE = 4
 CHECK_AZIMUTH = 0.4142135623730951
 CHECK_RTOL = 1e-10
 
-_FIELDS = ("M", "C", "K", "G", "K_cent", "f_cent", "B")
+_FIELDS = ("M", "C", "K", "G", "K_cent", "K_geom", "f_cent", "B")
 
 
 def _arrays(asm: Assembly, waves: bool = False) -> dict[str, np.ndarray]:

@@ -94,7 +94,7 @@ def periodic_data(geo, Minv: np.ndarray) -> tuple[dict, Periodic | None]:
     H1 = len(geo.harmonics)
     if H1 == 1:
         return constant, None
-    for key in ("M", "G", "K_cent", "f_cent"):
+    for key in ("M", "G", "K_cent", "K_geom", "f_cent"):
         if key not in geo.constant and np.any(_live(_complex(coef, key))):
             raise ModelError("model", f"its {key} depends on the input azimuth: not modelled "
                              "by the exact method")

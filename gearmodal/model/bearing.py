@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..frames import rz
-from ..kernels.joint import bearing_gap_jacobians, joint_gradients
+from ..kernels.joint import bearing_gap_jacobians, joint_curvatures, joint_gradients
 from . import validate as v
 from .clearance import MAX_RAMPS, polygon_ramps
 from .components import DIRECTIONS, GROUND, check_structure
@@ -128,6 +128,32 @@ class Bearing(Element):
         return new
 
     # -- its contribution to the assembly (DESIGN 2.3) --------------------------------------
+    def _curvatures(self, ctx):
+        """``curvature(i)``: the ``(parts, H)`` of direction ``i``'s joint deflection at the
+        assembly's azimuth (joint.py's curvatures; for :meth:`Contributions.curvature`).
+
+        The deflection is measured in axes that turn with the body the centrifugal load
+        turns with (joint.py): a's frame's own body where a's frame turns and has one (the
+        carrier of a planetary stage's frame, which the planets' load follows), else b, else
+        the ground's fixed axes."""
+        model = ctx.model
+        a = model.bodies[self.a]
+        b = model.bodies[self.b] if self.b is not None else None
+        az = ctx.azimuth
+        pa = rz(model.frames[a.frame].speed_ratio * az) @ np.asarray(self.at, dtype=float)
+        cb = ctx.centre(b, az) if b is not None else np.zeros(3)
+        pb = ctx.centre(a, az) + pa - cb
+        axes_frame = self.axes_frame or (b.frame if b is not None else GROUND)
+        gamma = model.frames[axes_frame].speed_ratio * az + self.axes_angle
+        H = joint_curvatures(pa[0], pa[1], pa[2], pb[0], pb[1], pb[2], gamma).reshape(6, 15, 15)
+        x = model.bodies.get(a.frame) if model.frames[a.frame].speed_ratio != 0.0 else None
+        x = x if x is not None else b
+        keep = list(range(6)) + (list(range(6, 12)) if b is not None else []) \
+            + (list(range(12, 15)) if x is not None else [])
+        parts = [(a, slice(0, 6))] + ([(b, slice(0, 6))] if b is not None else []) \
+            + ([(x, slice(3, 6))] if x is not None else [])
+        return lambda i: (parts, H[i][np.ix_(keep, keep)])
+
     def _rows(self, ctx, azimuth: float):
         """``(spring_row(i), gap_row(j))`` at ``azimuth``: the joint deflection ``g_i`` of
         direction ``i`` and the dead-band side ``j`` (2 i: +, 2 i + 1: -) as rows of the state
@@ -160,6 +186,7 @@ class Bearing(Element):
         where sin = 0)."""
         spring_row, gap_row = self._rows(ctx, ctx.azimuth)
         spring_row2, gap_row2 = self._rows(ctx, ctx.probe)
+        curvature = self._curvatures(ctx)
         radial, acts = (), False
         if self.clearance_shape != "axes":  # x and y make one radial clearance
             radial = ("x", "y")
@@ -193,13 +220,16 @@ class Bearing(Element):
             if gap == 0.0:
                 # no dead band: a linear spring on the joint deflection g_i
                 w = spring_row(i)
-                ctx.spring(w, k, c, self, key, acts=_acts(w) or _acts(spring_row2(i)))
+                ctx.spring(w, k, c, self, key, acts=_acts(w) or _acts(spring_row2(i)),
+                           curvature=curvature(i))
                 continue
+            parts, H = curvature(i)
             for j, side, sign in ((2 * i, "+", 1.0), (2 * i + 1, "-", -1.0)):
                 w = gap_row(j)
                 if _acts(w) or _acts(gap_row2(j)):
                     ctx.contact(w, gap, k, c, side == "+", self, f"{key}{side}", "bearing",
-                                columns=[(f"{self.name}.{key}", sign)])
+                                columns=[(f"{self.name}.{key}", sign)],
+                                curvature=(parts, sign * H))
 
 
 

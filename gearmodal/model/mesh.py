@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..frames import rz
-from ..kernels.mesh import mesh_gap_jacobian
+from ..kernels.mesh import mesh_gap_curvature, mesh_gap_jacobian
 from . import validate as v
 from .components import Gear, check_structure
 from .element import Element
@@ -186,12 +186,15 @@ class Mesh(Element):
             waves = [(h, z) if h > 0 else (-h, np.conj(z)) for h, z in waves if h != 0]
             off = off + sum((z * np.exp(1j * h * ctx.azimuth)).real for h, z in waves)
             w = ctx.row([(a, J[:6]), (b, J[6:])])
+            H = mesh_gap_curvature(ca[0], ca[1], cb[0], cb[1], rba, rbb, alpha, beta_b,
+                                   float(side), internal)
             if np.any(w):
                 variation = variation_of(model, self, a, b, bool(internal)) \
                     if self.alternation else None
                 ctx.contact(w, off, self.stiffness, self.damping, flank == "front", self,
                             flank, "mesh", columns=[(f"{self.name}.{flank}", 1.0)],
-                            variation=variation, waves=waves)
+                            variation=variation, waves=waves,
+                            curvature=([(a, slice(0, 6)), (b, slice(0, 6))], H))
 
 
     def _mesh_order(self, ctx, a, b, ca, cb) -> tuple[float, float]:
