@@ -33,15 +33,15 @@ Methods and settings: ``exact`` with both propagators (``taylor``, ``expm``) at 
 ``dt``; ``newmark`` at the same ``dt`` and at ``dt / 16``; ``scipy`` RK45 and Radau at rtol
 1e-6 (``atol`` 1e-12 of the state scale).
 
-Status, first match wins: ``error`` (the method raised: message in ``note``), ``timeout`` (CPU
-over ``--budget-s``, run in a subprocess and killed), ``nan`` (non-finite state), ``blowup``
-(a displacement beyond 1e3 x the exact run's largest, or in conservative cases an energy
-change of more than 10x the initial energy), ``energy`` (conservative cases: ``(max E - min E)
-/ E(0)`` above 1e-6; every conservative case starts with velocities only, ``E(0) > 0``),
-``missed_events`` (event count differs from exact's by more than 2 % or the first event time
-by more than 1 % of the case's contact duration), else ``ok``. ``exact`` (Taylor) is the
-reference for the event counts, so its own status reports only error/timeout/nan/blowup/energy.
-"""
+Status, first match wins: ``stopped`` (the method stopped with a ``SolveError``, its message in
+``note``: a method that fails should), ``error`` (it raised anything else), ``timeout`` (CPU
+over ``--budget-s``, run in a subprocess and killed), ``nan`` (non-finite state), ``blowup`` (a
+displacement beyond 1e3 x the exact run's largest, or in conservative cases an energy change of
+more than 10x the initial energy), ``energy`` (conservative cases: ``(max E - min E) / E(0)``
+above 1e-6; every conservative case starts with velocities only, ``E(0) > 0``),
+``missed_events`` (event count differs from exact's by more than 2 % or the first event time by
+more than 1 % of the case's contact duration), else ``ok``. ``exact`` (Taylor) is the reference
+for the event counts, so its own status reports only error/timeout/nan/blowup/energy. """
 
 from __future__ import annotations
 
@@ -174,7 +174,8 @@ def _run(conn, case_name, opts):
         conn.send(dict(ok=True, cpu_s=cpu, q=q, E=E, T=Tk, events=sim.events.time.to_numpy(),
                        contact_s=c["contact_s"], conservative=c["conservative"]))
     except Exception as exc:  # a failing method is a result
-        conn.send(dict(ok=False, note=f"{type(exc).__name__}: {exc}"[:300]))
+        conn.send(dict(ok=False, stopped=isinstance(exc, gm.SolveError),
+                       note=f"{type(exc).__name__}: {exc}"[:500]))
 
 
 def run_one(case_name, opts, budget_s):
@@ -202,7 +203,9 @@ def run_one(case_name, opts, budget_s):
 def classify(res, ref):
     """(status, energy drift, trajectory difference to exact) of one run (module docstring)."""
     if not res["ok"]:
-        return ("timeout" if res.get("timeout") else "error"), None, None
+        status = ("timeout" if res.get("timeout") else
+                  "stopped" if res.get("stopped") else "error")
+        return status, None, None
     q = res["q"]
     if not np.all(np.isfinite(q)):
         return "nan", None, None

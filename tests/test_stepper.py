@@ -145,13 +145,14 @@ def test_streamed_equals_held(stage, tmp_path):
     np.testing.assert_array_equal(back.q.to_numpy(), ra.q.to_numpy())
 
 
-@pytest.mark.parametrize("method, options", [("newmark", {}),
-                                             ("exact", {"propagator": "expm"})])
-def test_unchained_chunks_keep_run_times(pair, method, options):
+@pytest.mark.parametrize("method, options, dt", [("newmark", {}, 1e-5),
+                                                 ("exact", {"propagator": "expm"}, 1e-4)])
+def test_unchained_chunks_keep_run_times(pair, method, options, dt):
     """A method that does not chain (Newmark, the exact method's expm propagator) is given
     times from the call's start: its events are logged at the run's times and its loads
-    follow the ramp."""
-    kw = dict(dt=1e-4, loads={"pinion.torque": 0.0}, method=method,
+    follow the ramp. (Newmark at 1e-4 s, omega dt = 3.9 on the mesh, is stopped: its first
+    impact, switched a step late, penetrates with 15x the energy there is.)"""
+    kw = dict(dt=dt, loads={"pinion.torque": 0.0}, method=method,
               v0={"pinion.theta": 1.0}, **options)
     one, two = gm.Stepper(pair, **kw), gm.Stepper(pair, **kw)
     one.advance(0.02, {"pinion.torque": 2.0})
@@ -159,7 +160,9 @@ def test_unchained_chunks_keep_run_times(pair, method, options):
     two.advance(0.02, {"pinion.torque": 2.0})
     ea, eb = one.result().events, two.result().events
     assert len(ea) == len(eb) > 2
-    np.testing.assert_allclose(eb["time"], ea["time"], rtol=0, atol=1e-12)
+    # the call's restart retakes the acceleration from the equations (rounding), which the
+    # 40 impacts after it amplify: 1.4e-11 s at most (1e-6 of Newmark's step), measured
+    np.testing.assert_allclose(eb["time"], ea["time"], rtol=0, atol=1e-10)
 
 
 def test_record_false_keeps_nothing(pair):

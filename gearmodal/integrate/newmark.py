@@ -4,7 +4,11 @@ The family of HAWC2's solver, kept to check the exact method and to measure the 
 contact state is held over a step and switched after it when a gap changed sign; the event time
 is logged by linear interpolation of the gap between the step ends. Its limits: a contact
 shorter than a step, or two crossings inside one step, go unseen, and the state switch lags by
-up to one step.
+up to one step. Each switch at a step's end puts the contact's energy at that penetration in or
+takes it out, so a coarse step on stiff contacts can feed energy without bound: every step is
+audited against the system's energy balance (:mod:`.energy`), a run whose energy exceeds what
+its initial state and loads supplied stops with a :class:`~gearmodal.SolveError`, and the
+balance error of a finished run is its ``energy_error``.
 
 A turning system (``system.turning``) is stepped with its matrices, contact rows and load map
 evaluated at each step's end azimuth (one factorisation per step instead of one per contact
@@ -17,6 +21,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import ModelError, SolveError
+from .energy import EnergyAudit
 from .stretch import Stretch
 
 BETA, GAMMA = 0.25, 0.5
@@ -60,12 +65,15 @@ def run_newmark(stretch: Stretch):
     def load_at(k):
         return system.generalized_force(F_grid[k], azimuth(k))
 
+    audit = EnergyAudit(system, x0, azimuth(0), "newmark", _HINT.format(dt=dt))
     K, C, f, lu = mats(s, 0)
-    a = np.linalg.solve(M, load_at(0) + f - C @ v - K @ q)
+    L0 = load_at(0)
+    a = np.linalg.solve(M, L0 + f - C @ v - K @ q)
     p_prev = system.penetration(x0, azimuth(0))
     for k in range(n_steps):
         K, C, f, lu = mats(s, k + 1)
-        F1 = load_at(k + 1) + f
+        L1 = load_at(k + 1)
+        F1 = L1 + f
         rhs = (F1 + M @ (q / (BETA * h * h) + v / (BETA * h) + (0.5 / BETA - 1) * a)
                + C @ (GAMMA / (BETA * h) * q + (GAMMA / BETA - 1) * v
                       + h * (GAMMA / (2 * BETA) - 1) * a))
@@ -75,8 +83,10 @@ def run_newmark(stretch: Stretch):
         q, v, a = q1, v1, a1
         x = np.concatenate([q, v])
         if not np.all(np.isfinite(x)):
-            raise SolveError("simulate", f"newmark: the solution is not finite at "
-                                         f"t = {(k + 1) * dt:.9g} s")
+            raise SolveError("method", f"= 'newmark': the solution is not finite at "
+                             f"t = {(k + 1) * dt:.9g} s; " + _HINT.format(dt=dt))
+        audit.step(x, azimuth(k + 1), L0, L1, C, (k + 1) * dt)
+        L0 = L1
         p = system.penetration(x, azimuth(k + 1))
         new = p > 0
         changed = np.flatnonzero(new != s)
@@ -91,7 +101,12 @@ def run_newmark(stretch: Stretch):
             s = new
             # the acceleration consistent with the new state starts the next step
             K, C, f, lu = mats(s, k + 1)
-            a = np.linalg.solve(M, load_at(k + 1) + f - C @ v - K @ q)
+            a = np.linalg.solve(M, L1 + f - C @ v - K @ q)
         p_prev = p
         X[k + 1], S[k + 1] = x, s
-    return X, S, events, {"states": len(cache)}
+    return X, S, events, {"states": len(cache), "energy_error": audit.error}
+
+
+_HINT = ("Newmark switches contacts at step ends, which lets stiff contacts penetrate too "
+         "deep and feeds them energy at a coarse step: reduce dt (now {dt:g} s) or use "
+         "method='exact' (benchmarks/RESULTS.md, stability map)")

@@ -4,7 +4,10 @@ Within a contact state the right-hand side is ``A_s x + Bm F(t)``; every contact
 is an event function (terminal, direction set by its state). At an event the state switches and
 the solver restarts from the located point. Its limits, as documented by SciPy: events are
 found from sign changes between the solver's own steps, so two crossings inside one solver step
-(a brief contact, a graze) are missed, and the accuracy is that of ``rtol``/``atol``.
+(a brief contact, a graze) are missed, and the accuracy is that of ``rtol``/``atol``. A run
+whose energy on its output rows grows beyond what its initial state and loads supplied (a
+missed contact lets the bodies pass through it) stops with a :class:`~gearmodal.SolveError`
+(:mod:`.energy`).
 
 It is also the one method that integrates the exactly round bearing clearance
 (``clearance_shape="round"``, (R1) of :mod:`gearmodal.model.clearance`): a nonlinear force
@@ -25,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ModelError, SolveError
+from .energy import audit_rows
 from .loads import force_at
 from .stretch import Stretch
 from .system import PiecewiseLinearSystem
@@ -86,6 +90,11 @@ def run_scipy(stretch: Stretch, scipy_method: str = "RK45", rtol: float = 1e-6, 
         run.at_event(sol, idx, rhs)
         if len(run.events) > max_events:
             raise SolveError("simulate", f"scipy: more than {max_events} events")
+    F = stretch.F if stretch.loads is None else stretch.F + force_at(stretch.loads,
+                                                                     run.t_grid)
+    audit_rows(system, run.X, run.S, F, stretch.dt, stretch.azimuth0, "scipy",
+               f"its events were located at rtol = {rtol:g} (a contact missed or crossed "
+               "late lets the bodies pass through it): tighten rtol or use method='exact'")
     return run.X, run.S, run.events, {"nfev": run.nfev}
 
 
