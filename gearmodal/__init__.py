@@ -43,6 +43,7 @@ from .model import (
 from .model.components import G_STANDARD
 from .model.dump import dump, dumps
 from .model.toml_io import load, loads
+from .precision import FidelityTable, fidelity
 from .sharing import static_load_sharing
 from .static import Equilibrium, balance, equilibrium
 from .studies import sweep
@@ -50,7 +51,7 @@ from .studies import sweep
 __version__ = "0.1.0"
 
 __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Constraint", "Coupled",
-           "CoupledAssembly", "Drive", "Equilibrium", "FidelityChoice", "Frame",
+           "CoupledAssembly", "Drive", "Equilibrium", "FidelityChoice", "FidelityTable", "Frame",
            "GearmodalError", "Joint", "LinearConstraint", "LinearSystem", "ModelSystem", "System",
            "Gear", "Harmonic", "Mesh", "ModalResult", "Model", "ModelError", "RigidBody", "Shaft",
            "SolveError", "StoreError",
@@ -59,4 +60,4 @@ __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Const
            "gear_pair",
            "lin_parker_stage", "load", "loads", "dump", "dumps", "modal", "parallel_stage",
            "planetary_stage", "register_element", "static_load_sharing", "G_STANDARD",
-           "sweep"]
+           "sweep", "fidelity"]

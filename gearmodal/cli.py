@@ -133,9 +133,9 @@ def cmd_simulate(args) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .scene import load_scene
+    from .scene import load_scene, settings
 
-    scene = load_scene(_named(args.scene, "scenes"))
+    scene = load_scene(_named(args.scene, "scenes"), overrides=settings(args.set))
     if args.t_end is not None:
         if not args.t_end > 0:
             raise ModelError("--t-end", f"= {args.t_end!r}: must be > 0 s")
@@ -294,6 +294,54 @@ def cmd_study(args) -> int:
     return 0
 
 
+def _fraction(text: str) -> float:
+    """A relative target from ``1%`` or ``0.01``."""
+    t = str(text).strip()
+    try:
+        val = float(t[:-1]) / 100.0 if t.endswith("%") else float(t)
+    except ValueError:
+        raise ModelError("--target", f"= {text!r}: a relative error, as 1% or 0.01") from None
+    if not (math.isfinite(val) and val > 0):
+        raise ModelError("--target", f"= {text!r}: must be > 0 (1% or 0.01)")
+    return val
+
+
+def cmd_fidelity(args) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from tqdm import tqdm
+
+    from .precision import fidelity
+    from .scene import load_scene, settings
+
+    target = _fraction(args.target)
+    scene = load_scene(_named(args.scene, "scenes"), overrides=settings(args.set))
+    if scene.method == "auto":
+        scene.method = "exact"  # the table runs its own settings
+    bar = tqdm(total=None, desc="fidelity", unit="setting", disable=args.quiet)
+
+    def progress(i, n):
+        bar.total = n
+        bar.update(i - bar.n)
+
+    try:
+        table = fidelity(scene, target=target, out=args.out, progress=progress)
+    finally:
+        bar.close()
+    table.save(args.out)
+    cols = ["setting", "status", "cpu_s", "n_events", "peak_error", "sampled_peak_error",
+            "events_error", "double_contact_error"]
+    with __import__("pandas").option_context("display.width", 160, "display.max_columns", 10,
+                                             "display.float_format", "{:.3g}".format):
+        print(table.to_frame()[cols].to_string(index=False))
+    rec = table.recommend()
+    print(f"recommended for {target:g}: "
+          + (rec.setting if rec is not None else "none within the target")
+          + f"; wrote {args.out}/fidelity.csv, fidelity.png, fidelity.json")
+    return 0
+
+
 def cmd_docs_figures(args) -> int:
     from .figures import check_out, docs_figures
 
@@ -377,12 +425,27 @@ def build_parser() -> argparse.ArgumentParser:
                          "it only places the rows (the events, the exact peaks and the "
                          "solution do not depend on it), so a coarser one writes less; "
                          "newmark integrates at it; a turbine scene's must divide aero_dt")
+    sm.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="change a setting of the scene (repeatable), by the names of "
+                         "gm.simulate: method=newmark, dt=1e-4, t_end=0.1, options.rtol=1e-3; "
+                         "or any key of its tables: loads.NAME=VALUE, model.KEY=VALUE")
     sm.add_argument("--quiet", action="store_true", help="no progress bar")
     sm.add_argument("--format", choices=("parquet", "csv"), default="parquet",
                     help="the result tables' format (default parquet: written while the run "
                          "goes, in constant memory; csv: the run held in memory, then "
                          "written)")
     sm.set_defaults(func=cmd_simulate)
+    fd = sub.add_parser("fidelity", help="the scene's work-precision table: every method "
+                        "and setting, CPU time and error against the exact method")
+    fd.add_argument("scene", help="scene file (TOML)")
+    fd.add_argument("--out", required=True, type=_out_folder,
+                    help="output folder (fidelity.csv, .png, .json; a rerun resumes)")
+    fd.add_argument("--target", default="1%",
+                    help="the error the recommended setting must stay within (default 1%%)")
+    fd.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="change a setting of the scene first (as for simulate)")
+    fd.add_argument("--quiet", action="store_true", help="no progress bar")
+    fd.set_defaults(func=cmd_fidelity)
     st = sub.add_parser("study", help="run one of the paper's studies (studies/*.py): "
                         + ", ".join(STUDIES))
     st.add_argument("study", choices=STUDIES)

@@ -353,12 +353,43 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
         raise ModelError(str(p), "TOML nested too deeply") from None
 
     overrides = dict(overrides or {})
+    for table in ("options", "q0", "v0", "loads"):  # tables a scene may leave out
+        if any(str(k).startswith(table + ".") for k in overrides) and table not in doc:
+            doc[table] = {}
     model_over = {k[len("model."):]: x for k, x in overrides.items() if k.startswith("model.")}
     doc = override(doc, {k: x for k, x in overrides.items() if not k.startswith("model.")})
     try:
         return _scene(doc, p, model_over)
     except ModelError as e:
         raise ModelError(e.field, f"{e.message} (in {p})") from None
+
+
+#: the ``[scene]`` keys a setting (:func:`settings`) names without its table
+SCENE_KEYS = ("model", "t_end", "dt", "method", "speed_rpm", "tolerance", "start")
+
+
+def settings(pairs) -> dict:
+    """Scene overrides (:func:`load_scene`) from ``KEY=VALUE`` texts, as the command line's
+    ``--set`` gives them: ``method=newmark``, ``dt=1e-4``, ``options.rtol=1e-3``,
+    ``loads.carrier.torque=2e5``, ``model.stages.0.backlash=1e-4``. A key of the ``[scene]``
+    table (:data:`SCENE_KEYS`, the names of :func:`gearmodal.simulate`'s keywords) needs no
+    table; the others name theirs. A value is read as a TOML value (``1e-4``, ``true``,
+    ``"text"``), else taken as text (``newmark``).
+
+    Raises :class:`ModelError` naming a text without ``=`` or with an empty key."""
+    out = {}
+    for text in pairs:
+        key, sep, value = str(text).partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise ModelError("--set", f"= {text!r}: expected KEY=VALUE (for instance "
+                             "method=newmark, dt=1e-4, options.rtol=1e-3)")
+        try:
+            val = tomllib.loads(f"v = {value.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            val = value.strip()
+        out[f"scene.{key}" if key in SCENE_KEYS else key] = val
+    return out
 
 
 def _scene(doc: dict, p: Path, model_overrides: dict | None = None) -> Scene:
