@@ -33,8 +33,8 @@ def test_newmark_balance_is_exact_between_switches():
 
 def test_newmark_divergence_stops_with_the_setting_to_change():
     """The double-contact scene with Newmark at 1e-4 s (omega dt ~ 1 on the meshes) grew to
-    tooth forces of 3.5e36 N and was reported a success; it now stops where its energy first
-    exceeds twice what was supplied (t = 0.015 s)."""
+    tooth forces of 3.5e36 N and was reported a success; it now stops where the energy
+    it made exceeds all its initial state and loads supplied (t = 0.013 s)."""
     sc = load_scene(SCENE, overrides=settings(["method=newmark", "t_end=0.05"]))
     with pytest.raises(gm.SolveError, match=r"'newmark'.*diverging.*t = 0\.01\d* s.*"
                                             r"reduce dt \(now 0\.0001 s\)"):
@@ -48,7 +48,7 @@ def test_newmark_divergence_stops_with_the_setting_to_change():
 def test_scipy_at_a_loose_tolerance_stops():
     """scipy at rtol 1e-3 on the double-contact scene gave a back-flank peak 13.6x the exact
     one, without a word: a late-located contact lets the planets pass through the ring and its
-    energy on the output rows grows to 2.6x the supply by t = 0.017 s."""
+    energy on the output rows has grown by more than the supply by t = 0.017 s."""
     assert main(["simulate", SCENE, "--out", "unused", "--quiet", "--set", "method=scipy",
                  "--set", "options.rtol=1e-3", "--set", "t_end=0.03"]) == 4
 

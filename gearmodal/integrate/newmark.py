@@ -6,7 +6,7 @@ is logged by linear interpolation of the gap between the step ends. Its limits: 
 shorter than a step, or two crossings inside one step, go unseen, and the state switch lags by
 up to one step. Each switch at a step's end puts the contact's energy at that penetration in or
 takes it out, so a coarse step on stiff contacts can feed energy without bound: every step is
-audited against the system's energy balance (:mod:`.energy`), a run whose energy exceeds what
+audited against the system's energy balance (:mod:`.energy`), a run that makes more energy than
 its initial state and loads supplied stops with a :class:`~gearmodal.SolveError`, and the
 balance error of a finished run is its ``energy_error``.
 
