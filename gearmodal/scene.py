@@ -106,7 +106,7 @@ SCENE = Table("scene", (
 WAVE = Table("loads.<name> as a table", (
     Field("mean", "number", _LOAD_UNIT, default=0.0, doc="mean"),
     Field("amplitude", "number", _LOAD_UNIT, default=0.0, doc="amplitude"),
-    Field("frequency_hz", "number", "Hz", low=0.0, default=0.0, doc="frequency"),
+    Field("frequency_hz", "number", "Hz", low=0.0, high=1e8, default=0.0, doc="frequency"),
     Field("phase_deg", "number", "deg", doc="phase (default 0)"),
     Field("phase", "number", "rad", doc="phase in rad (what Scene.dumps writes; exact)")),
     "A load `mean + amplitude sin(2 pi frequency_hz t + phase)`; a load may also be a number "

@@ -23,6 +23,11 @@ PAIR = gm.load("studies/models/gear_pair.toml")
      r"indexed by time in s, got an index of datetime64.*total_seconds"),
     ({"pinion.torque": pd.Series([1.0, 2.0], index=pd.to_timedelta([0, 1], unit="s"))},
      r"indexed by time in s, got an index of timedelta64"),
+    # a NaN time compared False with its neighbours and passed the increasing-time check
+    ({"pinion.torque": pd.Series([1.0, 2.0, 3.0], index=[0.0, np.nan, 1.0])},
+     r"time index holds nan: every time must be a finite number of s"),
+    ({"pinion.torque": gm.Harmonic(mean=0.0, amplitude=1.0, frequency_hz=1e300)},
+     r"loads.pinion.torque.frequency_hz = 1e\+300: outside .* \[0, 1e\+08\] Hz"),
 ])
 def test_bad_loads_are_named(loads, match):
     with pytest.raises(gm.ModelError, match=match):

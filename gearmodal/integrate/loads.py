@@ -132,6 +132,10 @@ def _series(name: str, val: pd.Series) -> tuple[np.ndarray, np.ndarray]:
         raise ModelError(f"loads.{name}", f"a Series of {val.dtype} values: expected numbers "
                          "(N or N m)")
     idx = np.asarray(val.index, dtype=float)
+    if not np.all(np.isfinite(idx)):
+        bad = float(idx[~np.isfinite(idx)][0])
+        raise ModelError(f"loads.{name}", f"a Series whose time index holds {bad!r}: every "
+                         "time must be a finite number of s")
     if len(idx) < 1 or np.any(np.diff(idx) <= 0):
         raise ModelError(f"loads.{name}", "a Series must be indexed by increasing time")
     return idx, val.to_numpy(dtype=float)
@@ -175,6 +179,8 @@ def load_paths(names: list[str], loads: dict | None, t_end: float,
                 x = v.number(f"loads.{name}.{key}", x, "N or N m" if key != "phase" else "rad")
                 if key == "frequency_hz" and x < 0:
                     raise ModelError(f"loads.{name}.frequency_hz", f"= {x!r}: must be >= 0 Hz")
+                if key == "frequency_hz":
+                    v.plausible(f"loads.{name}.frequency_hz", x, "frequency")
             v.plausible(f"loads.{name}", abs(val.mean) + abs(val.amplitude), "load")
             const[j] += val.mean
             if val.frequency_hz == 0.0:

@@ -58,6 +58,9 @@ LIMITS = {
     "displacement": (0.0, 10.0, "m or rad"),
     "velocity": (0.0, 1e4, "m/s or rad/s"),
     "time": (1e-12, 1e6, "s"),
+    # a load's frequency: above the highest mesh frequency the other limits allow (10 000
+    # teeth at 1e5 rpm: 1.7e7 Hz); a 1e300 Hz wave is a typo, its phase has no digits left
+    "frequency": (0.0, 1e8, "Hz"),
 }
 
 
