@@ -25,15 +25,16 @@ over the channels whose reference peak is the exact maximum of the solution (eac
 dead band's: :meth:`~gearmodal.SimulationResult.peaks`); ``sampled_peak_error`` the same over
 the others (springs, a bearing's radial force: taken at the output rows by every method, the
 reference included, so it moves with ``dt``). The floor (10 % of the largest peak compared)
-keeps a channel the reference barely loads from dominating; a contact the reference never
-makes and a setting makes at that force counts as an error of 1. ``events_error = |N -
-N_ref| / N_ref`` on the contact-event count; on a planetary scene ``double_contact_error`` on
-the double-contact time (:func:`gearmodal.summary.summarize`; relative, its floor 1 % of the
-run's length). A setting that stops with a :class:`~gearmodal.SolveError` (a diverged
-Newmark, a scipy run that made energy) is a row with status ``stopped`` and its message: a
-stop is the answer, not a failure of the table; one the model refuses (a method that does not
-integrate it) is ``refused``. :meth:`FidelityTable.recommend` gives the cheapest setting whose
-errors are all within a target.
+keeps a channel the reference barely loads from dominating; a contact the reference never makes
+and a setting makes at that force counts as an error of 1. ``events_error = |N - N_ref| /
+N_ref`` on the contact-event count; on a planetary scene ``double_contact_error`` on the
+double-contact time (:func:`gearmodal.summary.summarize`; relative, its floor 1 % of the run's
+length). A turbine scene has no floor row (its initial state is the turbine's). A setting that
+stops with a :class:`~gearmodal.SolveError` (a diverged Newmark, a scipy run that made energy)
+is a row with status ``stopped`` and its message: a stop is the answer, not a failure of the
+table; one the model refuses (a method that does not integrate it) is ``refused``.
+:meth:`FidelityTable.recommend` gives the cheapest setting whose errors are all within a
+target.
 
 Rows are written as they finish to ``out`` (``fidelity.jsonl``, under the scene's identity):
 the same command on the same scene resumes, another scene into the same folder is refused.
@@ -65,6 +66,8 @@ ERRORS = ("peak_error", "sampled_peak_error", "events_error", "double_contact_er
 DEFAULT_TARGET = 0.01
 #: the floor row's change of the first DOF's initial velocity (m/s or rad/s): rounding level
 FLOOR_PERTURBATION = 1e-13
+#: the double-contact error's floor, a fraction of the run's length
+DC_FLOOR = 0.01
 #: F1's floor, a fraction of the largest reference peak of the channels compared
 PEAK_FLOOR = 0.1
 
@@ -73,10 +76,12 @@ def settings_of(scene) -> list[tuple[str, dict]]:
     """The settings the table runs on ``scene`` (module docstring): ``(label, changes)``,
     ``changes`` the scene's ``method``, ``dt`` and ``options``; the first is the reference."""
     dt = float(scene.dt)
-    out = [("exact (reference)", {"method": "exact", "dt": dt, "options": {}}),
-           ("exact, start perturbed (floor)", {"method": "exact", "dt": dt, "options": {},
-                                                "perturb": FLOOR_PERTURBATION}),
-           ("exact, output dt x4", {"method": "exact", "dt": 4 * dt, "options": {}})]
+    out = [("exact (reference)", {"method": "exact", "dt": dt, "options": {}})]
+    if scene.turbine is None:  # a turbine scene starts from its own initial state
+        out.append(("exact, start perturbed (floor)", {"method": "exact", "dt": dt,
+                                                        "options": {},
+                                                        "perturb": FLOOR_PERTURBATION}))
+    out.append(("exact, output dt x4", {"method": "exact", "dt": 4 * dt, "options": {}}))
     if scene.turbine is not None:
         aero = float(scene.drivetrain.get("aero_dt", 0.02))
         if not abs(aero / (4 * dt) - round(aero / (4 * dt))) < 1e-9 * aero / dt:
@@ -137,7 +142,7 @@ def errors(row: dict, ref: dict, t_end: float) -> dict:
     se, swhere = _peak_error(pp, rp, sampled)
     ne = abs(row["n_events"] - ref["n_events"]) / max(ref["n_events"], 1)
     a, b = row["double_contact_s"], ref["double_contact_s"]
-    dc = (abs(a - b) / max(abs(b), PEAK_FLOOR * t_end) if math.isfinite(b) else math.nan)
+    dc = (abs(a - b) / max(abs(b), DC_FLOOR * t_end) if math.isfinite(b) else math.nan)
     return {"peak_error": pe, "worst_channel": where, "sampled_peak_error": se,
             "worst_sampled_channel": swhere, "events_error": ne, "double_contact_error": dc}
 
@@ -239,12 +244,17 @@ def fidelity(scene, *, target: float = DEFAULT_TARGET, out=None,
     ``out``: a folder the rows are written to as they finish (``fidelity.jsonl``), and from
     which a second call on the same scene resumes; ``progress(i, n)`` after each setting.
 
-    Raises :class:`ModelError` for a bad ``target`` or a scene with ``method = "auto"``,
+    Raises :class:`ModelError` for a bad ``target`` or a scene the exact method refuses,
     :class:`StoreError` for an ``out`` holding another scene's rows, and the reference's own
-    :class:`SolveError` (without it there is nothing to measure against)."""
+    :class:`SolveError` (without it there is nothing to measure against). The scene's own
+    method and options do not matter (each setting sets them)."""
     if not (isinstance(target, (int, float)) and math.isfinite(target) and target > 0):
         raise ModelError("target", f"= {target!r}: must be a relative error > 0 (0.01 = 1 %)")
-    ident = scene.identity()
+    ident = None
+    if out is not None:  # the scene's identity, whatever method it names (the table sets it)
+        canon = copy.copy(scene)
+        canon.method, canon.options = "exact", {}
+        ident = canon.identity()
     done = _resume(out, ident)
     plan = settings_of(scene)
     rows, ref = [], None
@@ -253,11 +263,13 @@ def fidelity(scene, *, target: float = DEFAULT_TARGET, out=None,
             rec = done[label]
         else:
             rec = _run_one(scene, label, changes)
-            if out is not None:
+            if out is not None and rec["status"] != "refused":  # a refusal is not kept
                 _append(out, ident, rec)
+        if i == 0 and rec["status"] == "refused":
+            raise ModelError("scene", f"the exact method refuses it: {rec['note']}")
+        if i == 0 and rec["status"] != "ok":
+            raise SolveError("reference", f"the exact method on the scene: {rec['note']}")
         if i == 0:
-            if rec["status"] != "ok":
-                raise SolveError("reference", f"the exact method on the scene: {rec['note']}")
             ref = rec["q"]
         rows.append(rec)
         if progress is not None:
@@ -319,13 +331,15 @@ def _resume(out, ident: str) -> dict:
     if not f.exists():
         return {}
     done = {}
-    lines = f.read_text(encoding="utf-8").splitlines()
+    text = f.read_text(encoding="utf-8")
+    if text and not text.endswith("\n"):  # a last row cut by a stop: it runs again
+        text = text[:text.rfind("\n") + 1]
+        f.write_text(text, encoding="utf-8")
+    lines = text.splitlines()
     for n, line in enumerate(lines, 1):
         try:
             rec = json.loads(line)
         except json.JSONDecodeError:
-            if n == len(lines):
-                break  # a last line cut by a stop: that setting runs again
             raise StoreError("out", f"{f}:{n}: not a row of the fidelity table") from None
         if rec.get("identity") != ident:
             raise StoreError("out", f"= {str(out)!r} holds the fidelity rows of another scene "

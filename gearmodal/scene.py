@@ -356,6 +356,11 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     for table in ("options", "q0", "v0", "loads"):  # tables a scene may leave out
         if any(str(k).startswith(table + ".") for k in overrides) and table not in doc:
             doc[table] = {}
+    for table in ("q0", "v0", "loads"):  # their keys are names with dots ("carrier.torque")
+        for key in [k for k in overrides if str(k).startswith(table + ".")]:
+            if not isinstance(doc[table], dict):
+                break  # the scene's own error names it
+            doc[table][str(key)[len(table) + 1:]] = overrides.pop(key)
     model_over = {k[len("model."):]: x for k, x in overrides.items() if k.startswith("model.")}
     doc = override(doc, {k: x for k, x in overrides.items() if not k.startswith("model.")})
     try:
@@ -387,7 +392,10 @@ def settings(pairs) -> dict:
         try:
             val = tomllib.loads(f"v = {value.strip()}")["v"]
         except tomllib.TOMLDecodeError:
-            val = value.strip()
+            try:  # numbers TOML does not write (".001", "1.")
+                val = float(value)
+            except ValueError:
+                val = value.strip()
         out[f"scene.{key}" if key in SCENE_KEYS else key] = val
     return out
 

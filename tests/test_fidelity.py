@@ -60,9 +60,31 @@ def test_the_table_is_saved_and_resumed(table, monkeypatch):
     monkeypatch.setattr(fid, "_run_one", refuse)
     again = gm.fidelity(sc, out=out)
     assert again.to_frame().drop(columns="cpu_s").equals(ft.to_frame().drop(columns="cpu_s"))
+    # the scene's own method does not make it another scene; its t_end does
+    same = load_scene(RATTLE, overrides=settings(["t_end=0.02", "method=newmark"]))
+    assert gm.fidelity(same, out=out).to_frame().setting.tolist() == ft.to_frame().setting.tolist()
     other = load_scene(RATTLE, overrides=settings(["t_end=0.01"]))
     with pytest.raises(gm.StoreError, match="another scene"):
         gm.fidelity(other, out=out)
+
+
+def test_a_row_cut_by_a_stop_runs_again(table, tmp_path, monkeypatch):
+    ft, out, sc = table
+    rows = (out / "fidelity.jsonl").read_text().splitlines(keepends=True)
+    cut = tmp_path / "cut"
+    cut.mkdir()
+    (cut / "fidelity.jsonl").write_text("".join(rows[:-1]) + rows[-1][:40])
+    ran = []
+    real = fid._run_one
+
+    def counting(scene, label, changes):
+        ran.append(label)
+        return real(scene, label, changes)
+
+    monkeypatch.setattr(fid, "_run_one", counting)
+    again = gm.fidelity(sc, out=cut)
+    assert ran == [ft.to_frame().setting.iloc[-1]]  # only the cut row
+    assert len(again.to_frame()) == len(ft.to_frame())
 
 
 @pytest.mark.parametrize("target", [0.0, -1.0, math.nan, "1%"])

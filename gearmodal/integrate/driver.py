@@ -214,6 +214,7 @@ class Driver:
         self.sink = sink
         self.chained = bool(chained)
         self.n_events = 0
+        self.audits: dict = {}  # the reference methods' energy audit, continued call to call
 
     def reserve(self, n_steps: int) -> None:
         """Hold the run's ``n_steps`` output steps in one array written as the run goes, so
@@ -239,7 +240,7 @@ class Driver:
             Stretch(system, self.dt, n_steps, F, self.x, self.s, azimuth0=azimuth0, loads=loads,
                     peaks=self.peaks, t0=self.k * self.dt if t_span is None else t_span[0],
                     k_org=self.k if self.chained else None,
-                    t_span=t_span if self.chained else None),
+                    t_span=t_span if self.chained else None, audits=self.audits),
             **self.options)
         ev = event_rows(ev)
         if not self.chained:

@@ -65,7 +65,8 @@ def run_newmark(stretch: Stretch):
     def load_at(k):
         return system.generalized_force(F_grid[k], azimuth(k))
 
-    audit = EnergyAudit(system, x0, azimuth(0), "newmark", _HINT.format(dt=dt))
+    audit = EnergyAudit.of(stretch, "newmark", _HINT.format(dt=dt))
+    t0 = stretch.t0
     K, C, f, lu = mats(s, 0)
     L0 = load_at(0)
     a = np.linalg.solve(M, L0 + f - C @ v - K @ q)
@@ -84,8 +85,8 @@ def run_newmark(stretch: Stretch):
         x = np.concatenate([q, v])
         if not np.all(np.isfinite(x)):
             raise SolveError("method", f"= 'newmark': the solution is not finite at "
-                             f"t = {(k + 1) * dt:.9g} s; " + _HINT.format(dt=dt))
-        audit.step(x, azimuth(k + 1), L0, L1, C, (k + 1) * dt)
+                             f"t = {t0 + (k + 1) * dt:.9g} s; " + _HINT.format(dt=dt))
+        audit.step(x, azimuth(k + 1), L0, L1, C, t0 + (k + 1) * dt)
         L0 = L1
         p = system.penetration(x, azimuth(k + 1))
         new = p > 0

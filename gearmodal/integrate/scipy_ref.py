@@ -92,7 +92,7 @@ def run_scipy(stretch: Stretch, scipy_method: str = "RK45", rtol: float = 1e-6, 
             raise SolveError("simulate", f"scipy: more than {max_events} events")
     F = stretch.F if stretch.loads is None else stretch.F + force_at(stretch.loads,
                                                                      run.t_grid)
-    audit_rows(system, run.X, run.S, F, stretch.dt, stretch.azimuth0, "scipy",
+    audit_rows(stretch, run.X, run.S, F, "scipy",
                f"its events were located at rtol = {rtol:g} (a contact missed or crossed "
                "late lets the bodies pass through it): tighten rtol or use method='exact'")
     return run.X, run.S, run.events, {"nfev": run.nfev}

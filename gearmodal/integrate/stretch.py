@@ -32,7 +32,10 @@ class Stretch:
     time at the call's start, s). ``k_org``: the call continues a run at its output step
     ``k_org`` (``azimuth0`` and the loads' times then from the run's start); ``t_span``: the
     call's start and end times when they are not ``k dt`` (a stepper's re-basing grid).
-    :class:`~gearmodal.integrate.driver.Method` says what each method makes of them.
+    ``audits``: the run's energy audits (:mod:`~gearmodal.integrate.energy`, a dict a method
+    keeps its :class:`~gearmodal.integrate.energy.EnergyAudit` in), so that a run advanced
+    call by call is audited as one. :class:`~gearmodal.integrate.driver.Method` says what each
+    method makes of them.
     """
 
     system: PiecewiseLinearSystem
@@ -47,3 +50,4 @@ class Stretch:
     t0: float = 0.0
     k_org: int | None = None
     t_span: tuple | None = None
+    audits: dict | None = None
