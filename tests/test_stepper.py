@@ -434,3 +434,21 @@ def test_from_scene():
     assert list(out) == ["ring_planet1.front"] and math.isfinite(out["ring_planet1.front"])
     with pytest.raises(gm.ModelError, match="scene.turbine"):
         gm.Stepper.from_scene(load_scene("studies/scenes/600kw_turbine_10ms.toml"))
+
+
+def test_stepper_misuse_is_named(pair):
+    """Issue 62's Stepper cases: loads that are not a mapping, a reservation for a time
+    already passed, and a user's law that raises (its own error chained, not hidden)."""
+    st = gm.Stepper(pair, dt=1e-4, loads={"pinion.torque": 1.0})
+    with pytest.raises(gm.ModelError, match=r"^loads: expected \{load name: value\}.*list"):
+        st.advance(0.001, [1.0, 2.0])
+    st.advance(0.002)
+    with pytest.raises(gm.ModelError, match=r"t_end = 0.001: must be after the time reached"):
+        st.reserve(0.001)
+
+    def law(w):
+        raise ValueError("slip out of the table")
+
+    with pytest.raises(gm.ModelError, match="raised ValueError.*slip out of the table") as e:
+        gm.Stepper(pair, dt=1e-4, speed_torque=gm.SpeedTorque("wheel.theta", law))
+    assert isinstance(e.value.__cause__, ValueError)

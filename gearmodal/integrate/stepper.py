@@ -60,6 +60,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -541,6 +542,9 @@ class Stepper:
         if self._reserved is not None:
             raise ModelError("reserve", f"was called already (up to step {self._reserved})")
         n_steps = round(_positive("t_end", t_end) / self.dt)
+        if n_steps <= self.run.k:
+            raise ModelError("t_end", f"= {t_end!r}: must be after the time reached "
+                             f"({self.time!r} s); reserve the run's end")
         nsp = len(self.asm.springs) if self.asm.springs is not None else 0
         check_fits(n_steps + 1, 4 * self.n + len(self.asm.contacts.element) + nsp,
                    "give out=DIR (the rows go to disk as the run goes; gearmodal simulate "
@@ -632,6 +636,9 @@ class Stepper:
     def _given(self, u: np.ndarray, loads: dict | None, label: str) -> np.ndarray:
         """Load values ``u`` with the host's ``loads`` (by name) put in."""
         out = u.copy()
+        if loads is not None and not isinstance(loads, Mapping):
+            raise ModelError(label, f"expected {{load name: value}} (a dict), got "
+                             f"{type(loads).__name__} {loads!r:.60}")
         for name, val in (loads or {}).items():
             if name not in self.settings["loads"]:
                 raise ModelError(f"{label}.{name}", unknown(
@@ -707,10 +714,15 @@ class Stepper:
     def _law(self, w: float) -> tuple[float, float]:
         """The speed torque's ``(torque, dtorque/dspeed)`` at speed ``w`` (rad/s), checked."""
         try:
-            tau, dtau = self.speed_torque.law(w)
+            out = self.speed_torque.law(w)
+        except Exception as err:  # the user's law failed: say so, its own error chained
+            raise ModelError("speed_torque.law", f"raised {type(err).__name__} at {w!r} "
+                             f"rad/s: {err}") from err
+        try:
+            tau, dtau = out
         except (TypeError, ValueError):
             raise ModelError("speed_torque.law", f"at {w!r} rad/s: must return (torque, "
-                             "dtorque/dspeed), two numbers") from None
+                             f"dtorque/dspeed), two numbers; got {out!r:.60}") from None
         return (_number("speed_torque.law's torque", tau),
                 _number("speed_torque.law's derivative", dtau))
 
