@@ -83,6 +83,7 @@ class EnergyAudit:
         self.x = np.array(x0, dtype=float)
         self.azimuth = float(azimuth0)
         self.E0 = self.energy(self.x, self.azimuth, self.K0)
+        self.E_last = self.E0  # E of the state reached
         self.work = 0.0  # W of (E2)
         self.dissipated = 0.0  # D
         self.parametric = 0.0  # P
@@ -98,8 +99,9 @@ class EnergyAudit:
         return float(0.5 * v @ self.M @ v + 0.5 * q @ K0 @ q + 0.5 * np.sum(self.system.k * p * p))
 
     def step(self, x1: np.ndarray, azimuth1: float, F0: np.ndarray, F1: np.ndarray,
-             C: np.ndarray, t: float) -> None:
-        """Account one step to state ``x1`` (see the class docstring)."""
+             C: np.ndarray, t: float, K1: np.ndarray | None = None) -> None:
+        """Account one step to state ``x1`` (see the class docstring); ``K1``: the springs'
+        matrix at ``azimuth1`` of a turning system, where the caller has it."""
         n = self.n
         x0 = self.x
         dq = x1[:n] - x0[:n]
@@ -109,13 +111,13 @@ class EnergyAudit:
         self.supply += abs(dw)
         # h vm^T C vm, as dq = h vm (Newmark's average acceleration; the trapezoidal rule)
         self.dissipated += float(dq @ C @ vm)
-        K1 = self.K0
         if self.system.turning:
             # the turning springs' and contact rows' change over the step, at its start state
-            K1 = self.system.at(azimuth1)["K0"]
-            dp = (self.energy(x0, azimuth1, K1)
-                  - self.energy(x0, self.azimuth, self.K0))
-            self.parametric += dp
+            # (E(x0) at the step's start is the last step's E1: E does not depend on the state)
+            K1 = self.system.at(azimuth1)["K0"] if K1 is None else K1
+            self.parametric += self.energy(x0, azimuth1, K1) - self.E_last
+        else:
+            K1 = self.K0
         E1 = self.energy(x1, azimuth1, K1)
         made = E1 - self.E0 - self.work + self.dissipated - self.parametric  # (E3)
         budget = self.supply + abs(self.parametric)  # (E4)
@@ -127,6 +129,7 @@ class EnergyAudit:
         self.worst = max(self.worst, abs(made))
         self.scale = max(self.scale, budget + self.dissipated)
         self.x, self.azimuth, self.K0 = np.array(x1, dtype=float), float(azimuth1), K1
+        self.E_last = E1
 
     @property
     def error(self) -> float:

@@ -53,11 +53,18 @@ def run_newmark(stretch: Stretch):
     def azimuth(k):
         return azimuth0 + system.omega * k * dt
 
+    frozen: dict = {}  # a turning system's matrices at the last output time asked for
+
+    def at(k):
+        if frozen.get("k") != k:
+            frozen.update(k=k, matrices=system.at(azimuth(k)))
+        return frozen["matrices"]
+
     def mats(s, k):
         """Matrices of state ``s`` at output time ``k`` (cached per state when frozen)."""
         key = s.tobytes()
         if turning or key not in cache:
-            K, C, f = system.matrices(s, frozen=system.at(azimuth(k)) if turning else None)
+            K, C, f = system.matrices(s, frozen=at(k) if turning else None)
             Keff = M / (BETA * h * h) + GAMMA / (BETA * h) * C + K
             cache[key] = (K, C, f, sla.lu_factor(Keff))
         return cache[key]
@@ -86,7 +93,8 @@ def run_newmark(stretch: Stretch):
         if not np.all(np.isfinite(x)):
             raise SolveError("method", f"= 'newmark': the solution is not finite at "
                              f"t = {t0 + (k + 1) * dt:.9g} s; " + _HINT.format(dt=dt))
-        audit.step(x, azimuth(k + 1), L0, L1, C, t0 + (k + 1) * dt)
+        audit.step(x, azimuth(k + 1), L0, L1, C, t0 + (k + 1) * dt,
+                   at(k + 1)["K0"] if turning else None)
         L0 = L1
         p = system.penetration(x, azimuth(k + 1))
         new = p > 0

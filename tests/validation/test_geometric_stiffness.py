@@ -25,20 +25,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+# Lin & Parker's (1999) example stage: the published data, one copy (pytest puts this folder on
+# the path: its modules have no package)
+from test_lin_parker import LP  # noqa: E402
+
 import gearmodal as gm
 from gearmodal.assembly import as_assembly
 from gearmodal.modal import eigensolve
 
 ROOT = Path(__file__).resolve().parents[2]
 RPM = math.pi / 30.0
-#: Lin & Parker's (1999) example stage (as in test_lin_parker.py)
-LP = {
-    "mass": {"carrier": 5.43, "ring": 2.35, "sun": 0.4, "planet": 0.66},
-    "inertia_over_r2": {"carrier": 6.29, "ring": 3.0, "sun": 0.39, "planet": 0.61},
-    "bearing": {"carrier": 1e8, "ring": 1e8, "sun": 1e8, "planet": 1e8},
-    "torsional": {"carrier": 0.0, "ring": 1e9, "sun": 0.0},
-    "mesh": {"sun_planet": 5e8, "ring_planet": 5e8},
-}
+
 
 
 def _lin_parker(n=3, angles=None):
