@@ -479,6 +479,9 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     if s.size < 2 or not np.all(np.isfinite(s)) or np.any(s < 0) or np.any(np.diff(s) <= 0):
         raise ModelError("speeds_rpm", "must be at least two finite, increasing speeds >= 0 rpm")
     plausible("speeds_rpm", float(s[-1]), "speed_rpm")
+    check_speed = getattr(model, "check_speed", None)
+    if callable(check_speed):  # a model whose linearisation holds at rest only says so
+        check_speed(float(s[-1]))
     asm = model.assemble()
     asm.require_piecewise_linear("gm.campbell")
     red, N = reduction(asm)  # a coupled system is solved in its constrained coordinates

@@ -483,6 +483,9 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     if not math.isfinite(speed_rpm) or speed_rpm < 0:
         raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number >= 0 rpm")
     plausible("speed_rpm", speed_rpm, "speed_rpm")
+    check_speed = getattr(model, "check_speed", None)
+    if callable(check_speed):  # a model whose linearisation holds at rest only says so
+        check_speed(speed_rpm)
     # the model's assembly is reused while the model is unchanged (read-only, shared)
     asm, name = as_assembly(model, cached=True)
     asm.require_piecewise_linear("gm.modal")

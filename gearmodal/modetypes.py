@@ -5,10 +5,19 @@ only, planets move alike), ``translational`` (central members translate only), `
 (central members at rest). For drivetrains also ``housing`` (the housing on its suspension
 carries most of the kinetic energy), ``torsional`` (rotational coordinates carry nearly all of
 it) and ``mixed``; ``rigid`` for modes at (near) zero frequency.
+
+For an elastic turbine (:mod:`gearmodal.turbine.structure`) the families OpenFAST's Campbell
+diagrams use: ``tower FA<i>`` and ``tower SS<i>`` (fore-aft, side-to-side), ``drivetrain``
+(the shaft's torsion holds a quarter of the energy or more, or a coupled gearbox's torsion
+moves the rotor with a tenth of it) and the blade modes in multi-blade
+coordinates (Coleman): ``flap<i> collective``, ``flap<i> pitch`` (the cosine component: the
+rotor plane tilts about the horizontal), ``flap<i> yaw`` (the sine component), and the same
+for ``edge<i>``.
 """
 
 from __future__ import annotations
 
+import re
 from functools import lru_cache
 from typing import NamedTuple
 
@@ -25,6 +34,63 @@ def dof_energy(asm, shapes: np.ndarray) -> np.ndarray:
     e = np.real(shapes.conj() * (asm.M @ shapes))
     tot = e.sum(axis=0, keepdims=True)
     return np.divide(e, tot, out=np.zeros_like(e), where=tot > 0)
+
+
+#: an elastic turbine's coordinates (the last part of a coupled name)
+_TOWER = re.compile(r"tower_(fa|ss)(\d+)$")
+_BLADE = re.compile(r"blade(\d+)_((?:flap|edge)\d+)$")
+_SHAFT = ("shaft_twist", "generator_azimuth", "rotor_azimuth")
+
+
+@lru_cache(maxsize=32)
+def _turbine_groups(names: tuple):
+    """``(turbine DOF indices, {tower label: indices}, shaft indices, {blade mode: (blade
+    numbers, indices)})`` or None when ``names`` has no elastic turbine."""
+    tower: dict[str, list[int]] = {}
+    blades: dict[str, tuple[list[int], list[int]]] = {}
+    shaft: list[int] = []
+    for i, n in enumerate(names):
+        last = n.rsplit(".", 1)[-1]
+        if (m := _TOWER.match(last)) is not None:
+            tower.setdefault(f"tower {m.group(1).upper()}{m.group(2)}", []).append(i)
+        elif (m := _BLADE.match(last)) is not None:
+            nums, idx = blades.setdefault(m.group(2), ([], []))
+            nums.append(int(m.group(1)))
+            idx.append(i)
+        elif last in _SHAFT or n.endswith(".rotor.theta"):  # a coupled gearbox's rotor too
+            shaft.append(i)
+    if not blades and not tower:
+        return None
+    every = sorted([i for v in tower.values() for i in v] + shaft
+                   + [i for _, v in blades.values() for i in v])
+    return np.array(every), tower, np.array(shaft, dtype=int), blades
+
+
+def turbine_family(groups, shape: np.ndarray, share: np.ndarray) -> str:
+    """The family of one mode of an elastic turbine (module docstring) from its ``shape``
+    and its DOFs' kinetic-energy ``share``; blade ``k`` of ``n`` sits at azimuth
+    ``2 pi (k - 1) / n`` (the assembly's azimuth 0)."""
+    _, tower, shaft, blades = groups
+    if shaft.size and share[shaft].sum() >= 0.25:
+        return "drivetrain"
+    parts = {lab: share[idx].sum() for lab, idx in tower.items()}
+    parts.update({mode: share[idx].sum() for mode, (_, idx) in blades.items()})
+    best = max(parts, key=parts.get)
+    if best in tower:
+        return best
+    nums, idx = blades[best]
+    nb = max(nums)
+    psi = 2 * np.pi * (np.array(nums) - 1) / nb
+    q = shape[idx]
+    a0 = q.mean()
+    a1 = 2 / nb * (q * np.cos(psi)).sum()
+    b1 = 2 / nb * (q * np.sin(psi)).sum()
+    comp = {"collective": nb * abs(a0) ** 2, "pitch": nb / 2 * abs(a1) ** 2,
+            "yaw": nb / 2 * abs(b1) ** 2}
+    rest = max(float(np.sum(np.abs(q) ** 2)) - sum(comp.values()), 0.0)
+    if nb > 3 and rest > max(comp.values()):
+        return f"{best} differential"
+    return f"{best} {max(comp, key=comp.get)}"
 
 
 class _Groups(NamedTuple):
@@ -99,12 +165,16 @@ def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e
         # the sum down its DOF rows, in DOF order, as np.bincount(stage_idx, weights=e[:, m])
         best = np.argmax(np.stack([e[g.stage_idx == k].sum(axis=0)
                                    for k in range(g.n_stages)]), axis=0).tolist()
+    turbine = _turbine_groups(tuple(asm.dof_names))
     types = []
     for m in range(shapes.shape[1]):
         if rigid[m]:
             types.append("rigid")
             continue
         em = E[m]
+        if turbine is not None and em[turbine[0]].sum() > 0.5:
+            types.append(turbine_family(turbine, shapes[:, m], em))
+            continue
         if g.has_housing and em[g.housing].sum() > 0.5:
             types.append("housing")
             continue
@@ -134,7 +204,10 @@ def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e
                     types.append("translational")
                     continue
         if em[g.rot].sum() > 0.9:
-            types.append("torsional")
+            # the gearbox's torsion moving the turbine's rotor (a tenth of the energy or more):
+            # the turbine's drivetrain torsion
+            near = turbine is not None and em[turbine[0]].sum() >= 0.1
+            types.append("drivetrain" if near else "torsional")
         else:
             types.append("mixed")
     return types

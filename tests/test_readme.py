@@ -30,6 +30,9 @@ def test_python_block_runs(page, i, code, tmp_path, monkeypatch):
             or importlib.util.find_spec("openfast_io") is None):
         pytest.skip("the nrel5mw extra: pip install -e '.[nrel5mw]' and pip install "
                     "--no-deps 'rosco>=2.10,<2.11' (CI installs them)")
+    if "flexible(" in code and not os.environ.get("GEARMODAL_CI") and (
+            importlib.util.find_spec("pybmodes") is None):
+        pytest.skip("the elastic extra: pip install -e '.[elastic]' (CI installs it)")
     monkeypatch.chdir(tmp_path)
     # paths in the pages are relative to the repository root
     code = code.replace('"studies/', f'"{ROOT}/studies/')

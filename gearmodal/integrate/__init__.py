@@ -155,6 +155,9 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     [['mesh', 'front', 'closed'], ['mesh', 'front', 'open']]
     """
     get_method(method, options)  # the name and its options checked
+    check_speed = getattr(model, "check_speed", None)
+    if callable(check_speed):  # a model whose linearisation holds at rest only says so
+        check_speed(speed_rpm)
     n_steps = _output_steps(t_end, dt, speed_rpm, load_dt)
     omega = float(speed_rpm) * 2 * math.pi / 60  # the input azimuth is omega t
     asm, name, casm, geo = _assembly_of(model, omega, speed_rpm)

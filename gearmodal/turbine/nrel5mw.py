@@ -317,3 +317,49 @@ def simulate(wind: Wind, t_end: float, *, gearbox=None, deck: Deck | None = None
                efficiency=d.generator_efficiency) as ctrl:
         return simulate_drivetrain(tur, wind, gearbox, t_end, dt=dt, aero_dt=aero_dt,
                                    controller=ctrl, progress=progress, **settings)
+
+
+def elastodyn_file(path=None) -> Path:
+    """The ElastoDyn main file of the 5 MW deck at ``path`` (a folder holding
+    ``NREL-5MW.fst``; default: the one the ``rosco`` wheel ships), named by its ``EDFile``."""
+    if path is None:
+        path = rosco_files()[1]
+    path = Path(path)
+    fst = path / "NREL-5MW.fst"
+    if not fst.is_file():
+        raise ModelError("deck", f"= {str(path)!r}: no NREL-5MW.fst there")
+    for line in fst.read_text(errors="replace").splitlines():
+        tok = line.split()
+        if len(tok) >= 2 and tok[1] == "EDFile":
+            return path / tok[0].strip('"')
+    raise ModelError("deck", f"{fst}: no EDFile line")
+
+
+def flexible(gearbox: Model | None = None, generator: str = "locked", *, deck=None,
+             shapes: str = "computed", flap: int = 2, edge: int = 1, fore_aft: int = 2,
+             side_to_side: int = 2):
+    """The elastic NREL 5 MW turbine built from its OpenFAST deck (issue 56): tower, nacelle,
+    shaft, hub and three bending blades (:mod:`gearmodal.turbine.structure`), a model
+    :func:`gearmodal.modal` solves at 0 rpm.
+
+    Parameters
+    ----------
+    gearbox : None (the deck's two-mass drivetrain: ``DTTorSpr`` between rotor and generator)
+        or a drivetrain :class:`~gearmodal.Model`, for instance
+        ``gm.load("studies/models/nrel5mw.toml")``, put between rotor and generator.
+    generator : ``"locked"`` (the definition report's Table 9-1) or ``"free"``.
+    deck : the folder holding ``NREL-5MW.fst`` (default: the ``rosco`` wheel's).
+    shapes, flap, edge, fore_aft, side_to_side : the assumed modes
+        (:func:`gearmodal.turbine.structure.elastic_turbine`).
+
+    Examples
+    --------
+    >>> import gearmodal as gm
+    >>> res = gm.modal(gm.turbine.nrel5mw.flexible())           # doctest: +SKIP
+    >>> res.to_frame()[["frequency_hz", "mode_type"]].head(3)    # doctest: +SKIP
+    """
+    from .structure import elastic_turbine
+
+    return elastic_turbine(elastodyn_file(deck), gearbox=gearbox, generator=generator,
+                           flap=flap, edge=edge, fore_aft=fore_aft, side_to_side=side_to_side,
+                           shapes=shapes)
