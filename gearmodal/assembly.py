@@ -208,6 +208,8 @@ class Assembly:
     K_geom : the geometric stiffness per (rad/s)^2 included in ``K_cent`` (module docstring,
         (G1)-(G2)); ``K_cent - K_geom`` is the centripetal-only linearisation of Lin & Parker
         (1999) (``geometric_stiffness=False`` in :func:`gearmodal.modal`).
+    K_speed : stiffness per rad/s of speed (default zero; a turning rotor's structural damping
+        in multi-blade coordinates, :mod:`gearmodal.turbine.assumed_modes`).
     f_cent : centrifugal force per (rad/s)^2.
     B : load map, generalised force = ``B @ u`` for the load values ``u`` (N, N m).
     contacts : the unilateral contacts (:class:`Contacts`).
@@ -235,10 +237,13 @@ class Assembly:
     #: input speed plus ``input_speed @ v`` (None: the model names no input)
     input_speed: np.ndarray | None = None
     K_geom: np.ndarray | None = None
+    K_speed: np.ndarray | None = None
 
     def __post_init__(self):
         if self.K_geom is None:
             self.K_geom = np.zeros_like(self.K_cent)
+        if self.K_speed is None:
+            self.K_speed = np.zeros_like(self.K_cent)
 
     def speed_stiffness(self, geometric_stiffness: bool = True) -> np.ndarray:
         """The stiffness per (rad/s)^2 of the steady rotation: ``K_cent``, or without the
@@ -275,10 +280,12 @@ class Assembly:
         return s
 
     def stiffness(self, state=None, speed: float = 0.0) -> np.ndarray:
-        """``K + K_s + speed^2 K_cent`` for contact state ``state``; speed in rad/s."""
+        """``K + K_s + speed K_speed + speed^2 K_cent`` for contact state ``state``; speed in
+        rad/s."""
         s = self.state(state)
         W = self.contacts.W[s]
-        return self.K + (W.T * self.contacts.stiffness[s]) @ W + speed**2 * self.K_cent
+        return (self.K + (W.T * self.contacts.stiffness[s]) @ W + speed * self.K_speed
+                + speed**2 * self.K_cent)
 
     def damping(self, state=None, speed: float = 0.0) -> np.ndarray:
         """``C + C_s + speed G`` for contact state ``state``; speed in rad/s."""
@@ -735,6 +742,7 @@ def _on_pins(model, pinned: list[str], azimuth: float) -> Assembly:
     return Assembly(dof_names=[full.dof_names[i] for i in idx],
                     load_names=[full.load_names[j] for j in cols], M=proj(full.M),
                     C=proj(full.C), K=proj(full.K), G=proj(full.G), K_cent=proj(full.K_cent),
+                    K_speed=proj(full.K_speed),
                     K_geom=proj(full.K_geom),
                     f_cent=proj(full.f_cent, right=False), B=proj(full.B[:, cols], right=False),
                     contacts=red(full.contacts), azimuth=azimuth,

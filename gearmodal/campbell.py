@@ -25,7 +25,7 @@ from .modal import RPM, band_basis, check_band, eigensolve, geometry_table
 from .model.components import Gear
 from .model.model import Model
 from .model.validate import plausible
-from .modetypes import LOOSE, QUIET, classify
+from .modetypes import LOOSE, QUIET, classify, turbine_groups
 from .result_io import read_header, write_header
 from .whirl import damping_ratios, log_decrement, rigid_undamped, translation_pairs, whirl
 
@@ -479,9 +479,6 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     if s.size < 2 or not np.all(np.isfinite(s)) or np.any(s < 0) or np.any(np.diff(s) <= 0):
         raise ModelError("speeds_rpm", "must be at least two finite, increasing speeds >= 0 rpm")
     plausible("speeds_rpm", float(s[-1]), "speed_rpm")
-    check_speed = getattr(model, "check_speed", None)
-    if callable(check_speed):  # a model whose linearisation holds at rest only says so
-        check_speed(float(s[-1]))
     asm = model.assemble()
     asm.require_piecewise_linear("gm.campbell")
     red, N = reduction(asm)  # a coupled system is solved in its constrained coordinates
@@ -494,6 +491,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     n = red.n
     M = red.M
     Kc = red.speed_stiffness(bool(geometric_stiffness))
+    Kv = red.K_speed if np.any(red.K_speed) else None
     solvers: dict[bytes, object] = {}
     check_band(n_modes, fmax_hz)
     band = n_modes is not None or fmax_hz is not None
@@ -509,7 +507,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
             V = band_basis(M, red.stiffness(st), n_modes) if band else None
             if V is None:
                 solvers[key] = (None, _sweep_solver(M, red.damping(st), red.stiffness(st),
-                                                    red.G, Kc))
+                                                    red.G, Kc, Kv))
             else:  # the band: the problem projected on the state's basis, solved per speed
 
                 def pr(X):
@@ -517,7 +515,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
 
                 solvers[key] = (V, _sweep_solver(pr(M), pr(red.damping(st)),
                                                  pr(red.stiffness(st)), pr(red.G),
-                                                 pr(Kc)))
+                                                 pr(Kc), pr(Kv)))
         V, solve = solvers[key]
         lam, phi = solve(om)
         if V is not None:
@@ -570,7 +568,11 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
             progress(i + 1, s.size)
     zetas = rigid_undamped(zetas, types)
     base = model.merged if isinstance(model, Coupled) else model
-    order_map = default_orders(base) if orders is None else dict(orders)
+    own = getattr(model, "excitation_orders", None)  # a system that knows its own orders
+    if orders is not None:
+        order_map = dict(orders)
+    else:
+        order_map = own() if callable(own) else default_orders(base)
     geometry = geometry_table(base)
     whirls = np.full((s.size, n), "", dtype=object)
     if geometry is not None:  # the orbits of the body centres, in the original coordinates
@@ -590,15 +592,16 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
                                  "states": np.array(states)})
 
 
-def _sweep_solver(M, C, K, G, Kc):
+def _sweep_solver(M, C, K, G, Kc, Kv=None):
     """``solve(speed)``: :func:`gearmodal.modal.eigensolve` of ``(M, C, K, G, speed, Kc)`` for a
     sweep in which only the speed changes.
 
-    ``M^-1 K``, ``M^-1 K_cent``, ``M^-1 C`` and ``M^-1 G`` are computed once, so that each speed
-    costs one non-symmetric eigen-solve of the state matrix
-    ``[[0, I], [-(M^-1 K + speed^2 M^-1 K_cent), -(M^-1 C + speed M^-1 G)]]``; eigenvalues and
-    shapes are selected and ordered exactly as ``eigensolve`` does. Speeds without a damping
-    term (undamped at rest) go to ``eigensolve`` itself (the symmetric solver).
+    ``M^-1 K``, ``M^-1 K_cent``, ``M^-1 K_speed``, ``M^-1 C`` and ``M^-1 G`` are computed once, so
+    that each speed costs one non-symmetric eigen-solve of the state matrix
+    ``[[0, I], [-(M^-1 (K + speed K_speed + speed^2 K_cent)), -(M^-1 (C + speed G))]]``;
+    eigenvalues and shapes are selected and ordered exactly as ``eigensolve`` does. Speeds
+    without a damping term (undamped at rest) go to ``eigensolve`` itself (the symmetric
+    solver).
 
     The state matrix goes straight to LAPACK ``dgeev`` (right eigenvectors, workspace size
     queried once), which is what ``scipy.linalg.eig`` calls; of its real-format eigenvectors only
@@ -613,6 +616,7 @@ def _sweep_solver(M, C, K, G, Kc):
     MiK, MiC = minv(K), minv(C)
     MiG = minv(G) if G is not None else None
     MiKc = minv(Kc) if Kc is not None else None
+    MiKv = minv(Kv) if Kv is not None else None
     A0 = np.zeros((2 * n, 2 * n), order="F")  # Fortran order: LAPACK works on it in place
     A0[:n, n:] = np.eye(n)
     geev, geev_lwork = sla.get_lapack_funcs(("geev", "geev_lwork"), (A0,))
@@ -622,18 +626,20 @@ def _sweep_solver(M, C, K, G, Kc):
     def solve(speed):
         D = C + (speed * G if G is not None and speed else 0.0)
         if not np.any(D):
-            return eigensolve(M, C, K, G, speed, Kc)
+            return eigensolve(M, C, K, G, speed, Kc, Kv)
         A = A0.copy(order="F")
         lower_k, lower_d = A[n:, :n], A[n:, n:]
         np.negative(MiK, out=lower_k)
         if MiKc is not None and speed:
             lower_k -= speed**2 * MiKc
+        if MiKv is not None and speed:
+            lower_k -= speed * MiKv
         np.negative(MiC, out=lower_d)
         if MiG is not None and speed:
             lower_d -= speed * MiG
         wr, wi, _, vr, info = geev(A, compute_vl=0, compute_vr=1, lwork=lwork, overwrite_a=1)
         if info != 0:
-            return eigensolve(M, C, K, G, speed, Kc)  # scipy.linalg.eig reports the failure
+            return eigensolve(M, C, K, G, speed, Kc, Kv)  # scipy.linalg.eig reports the failure
         lam = np.empty(2 * n, dtype=complex)
         lam.real, lam.imag = wr, wi
         # selection and order as in eigensolve: oscillatory roots with Im > 0, then the real
@@ -764,8 +770,12 @@ def _labeller(asm, rigid_rel: float = 1e-6):
     eps = np.finfo(float).eps
     gamma = 16.0 * (n + 2) * eps
 
+    turbine = turbine_groups(tuple(names))
+
     def label(phi, Mphi, freq_hz, fmax):
         nm = phi.shape[1]
+        if turbine is not None:  # an elastic turbine's families: classify itself, speed by speed
+            return np.full(nm, "mixed", dtype=object), np.ones(nm, dtype=bool)
         # rigid: stiffness Rayleigh quotient num / den (as a frequency) below rigid_rel * fmax
         num = _re_dot(phi, _matmul(K, phi))
         den = _re_dot(phi, Mphi)

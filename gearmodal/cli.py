@@ -90,7 +90,13 @@ def _named(path: str, kind: str) -> str:
 def _load(path: str):
     from .model.toml_io import load
 
-    return load(_named(path, "models"))
+    path = _named(path, "models")
+    if Path(path).suffix == ".toml":
+        from .turbine.structure import is_elastic_turbine_file, load_elastic_turbine
+
+        if is_elastic_turbine_file(path):  # the elastic turbine (issue 56)
+            return load_elastic_turbine(path)
+    return load(path)
 
 
 def cmd_campbell(args) -> int:

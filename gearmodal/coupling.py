@@ -128,15 +128,23 @@ class LinearSystem(System):
     name : system name (no dots). dof_names : coordinate names.
     M, K : mass and stiffness (n x n). C : damping (default zero).
     load_names, load_map : named loads and their generalised-force map ``L`` (n x n_loads).
+    G, K_cent, K_speed : terms of the input speed ``Omega`` (default zero): at speed the
+        system is ``M a + (C + Omega G) v + (K + Omega K_speed + Omega^2 K_cent) q = L u``
+        (a turning rotor in multi-blade coordinates); the linear analyses and the integrators
+        scale them by the coupled system's input speed.
     """
 
-    def __init__(self, name: str, dof_names, M, K, C=None, load_names=(), load_map=None):
+    def __init__(self, name: str, dof_names, M, K, C=None, load_names=(), load_map=None, *,
+                 G=None, K_cent=None, K_speed=None):
         self.name = name
         self.dof_names = list(dof_names)
         n = len(self.dof_names)
         self.M = _square(M, n, f"{name}.M")
         self.K = _square(K, n, f"{name}.K")
         self.C = np.zeros((n, n)) if C is None else _square(C, n, f"{name}.C")
+        self.G, self.K_cent, self.K_speed = (
+            np.zeros((n, n)) if X is None else _square(X, n, f"{name}.{label}")
+            for X, label in ((G, "G"), (K_cent, "K_cent"), (K_speed, "K_speed")))
         self.load_names = list(load_names)
         L = np.zeros((n, len(self.load_names))) if load_map is None else np.asarray(
             load_map, dtype=float).reshape(n, len(self.load_names))
@@ -384,7 +392,7 @@ class CoupledAssembly(Assembly):
                 dof_names=[self.dof_names[i] for i in self.independent],
                 load_names=list(self.load_names), M=N.T @ self.M @ N, C=N.T @ self.C @ N,
                 K=N.T @ self.K @ N, G=N.T @ self.G @ N, K_cent=N.T @ self.K_cent @ N,
-                K_geom=N.T @ self.K_geom @ N,
+                K_geom=N.T @ self.K_geom @ N, K_speed=N.T @ self.K_speed @ N,
                 f_cent=N.T @ self.f_cent, B=N.T @ self.B, contacts=red(self.contacts),
                 azimuth=self.azimuth, body_slices={}, springs=red(self.springs),
                 round=red(self.round))
@@ -409,7 +417,7 @@ class CoupledAssembly(Assembly):
             Fc = np.where(np.atleast_2d(state), c.stiffness * (q @ c.W.T - c.offset)
                           + c.damping * (v @ c.W.T), 0.0)
         Bres = (a @ self.M.T + v @ (self.C + speed * self.G).T
-                + q @ (self.K + speed**2 * self.K_cent).T + Fc @ c.W
+                + q @ (self.K + speed * self.K_speed + speed**2 * self.K_cent).T + Fc @ c.W
                 - u @ self.B.T - speed**2 * self.f_cent)
         lam, *_ = np.linalg.lstsq(self.Gc.T, -Bres.T, rcond=None)
         return lam.T
@@ -586,6 +594,7 @@ class Coupled:
 
         M, C, K = grow(base.M, n, n), grow(base.C, n, n), grow(base.K, n, n)
         G, Kc, Kg = grow(base.G, n, n), grow(base.K_cent, n, n), grow(base.K_geom, n, n)
+        Kv = grow(base.K_speed, n, n)
         B = grow(base.B, n, len(loads))
         fc = np.concatenate([base.f_cent, np.zeros(n - n0)])
         names = list(base.dof_names)
@@ -595,6 +604,8 @@ class Coupled:
             Ms, Cs, Ks = s.tangents()
             sl = slice(k, k + s.n)
             M[sl, sl], C[sl, sl], K[sl, sl] = Ms, Cs, Ks
+            if isinstance(s, LinearSystem):  # its speed terms, per rad/s of the input speed
+                G[sl, sl], Kc[sl, sl], Kv[sl, sl] = s.G, s.K_cent, s.K_speed
             L = np.asarray(s.load_map(), dtype=float).reshape(s.n, len(s.load_names))
             B[sl, j:j + len(s.load_names)] = L
             names += [f"{s.name}.{d}" for d in s.dof_names]
@@ -615,6 +626,7 @@ class Coupled:
         N, ind = self._basis(Gc)
         return CoupledAssembly(
             dof_names=names, load_names=loads, M=M, C=C, K=K, G=G, K_cent=Kc, K_geom=Kg,
+            K_speed=Kv,
             f_cent=fc, B=B,
             contacts=pad(base.contacts), azimuth=azimuth, body_slices=slices,
             springs=pad(base.springs), round=pad(base.round), Gc=Gc, N=N, independent=ind,

@@ -369,13 +369,16 @@ def _real_shape(v: np.ndarray) -> np.ndarray:
     return np.real(v * np.conj(v[j]) / np.abs(v[j]))
 
 
-def eigensolve(M, C, K, G=None, speed=0.0, Kc=None):
+def eigensolve(M, C, K, G=None, speed=0.0, Kc=None, Kv=None):
     """Eigenvalues ``lambda`` (n,) and displacement shapes (n, n) of the quadratic problem
-    ``(lambda^2 M + lambda (C + speed G) + K + speed^2 Kc) phi = 0``, one per DOF, ordered by
-    ``|lambda|``. Uses the symmetric generalised solver when the damping term vanishes."""
+    ``(lambda^2 M + lambda (C + speed G) + K + speed Kv + speed^2 Kc) phi = 0``, one per DOF,
+    ordered by ``|lambda|``. Uses the symmetric generalised solver when the damping term
+    vanishes."""
     n = M.shape[0]
     D = C + (speed * G if G is not None and speed else 0.0)
     Ks = K + (speed**2 * Kc if Kc is not None and speed else 0.0)
+    if Kv is not None and speed and np.any(Kv):
+        Ks = Ks + speed * Kv
     if not np.any(D):
         w2, phi = sla.eigh(Ks, M)
         lam = np.sqrt(w2.astype(complex))  # negative w2 (centripetal softening) -> real lambda
@@ -431,7 +434,7 @@ def band_basis(M, K, n_modes=None, fmax_hz=None) -> np.ndarray | None:
     return sla.eigh(K, M, subset_by_index=[0, m - 1])[1]
 
 
-def band_solve(V, M, C, K, G=None, speed=0.0, Kc=None):
+def band_solve(V, M, C, K, G=None, speed=0.0, Kc=None, Kv=None):
     """:func:`eigensolve` of the problem projected on the basis ``V`` (:func:`band_basis`):
     eigenvalues and shapes ``V y`` of its ``V.shape[1]`` lowest modes, ordered by
     ``|lambda|``. The projection is the band's approximation: its error against the full
@@ -439,7 +442,7 @@ def band_solve(V, M, C, K, G=None, speed=0.0, Kc=None):
     def pr(X):
         return None if X is None else V.T @ X @ V
 
-    lam, y = eigensolve(pr(M), pr(C), pr(K), pr(G), speed, pr(Kc))
+    lam, y = eigensolve(pr(M), pr(C), pr(K), pr(G), speed, pr(Kc), pr(Kv))
     return lam, V @ y
 
 
@@ -483,9 +486,6 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
     if not math.isfinite(speed_rpm) or speed_rpm < 0:
         raise ModelError("speed_rpm", f"= {speed_rpm!r}: must be a finite number >= 0 rpm")
     plausible("speed_rpm", speed_rpm, "speed_rpm")
-    check_speed = getattr(model, "check_speed", None)
-    if callable(check_speed):  # a model whose linearisation holds at rest only says so
-        check_speed(speed_rpm)
     # the model's assembly is reused while the model is unchanged (read-only, shared)
     asm, name = as_assembly(model, cached=True)
     asm.require_piecewise_linear("gm.modal")
@@ -504,9 +504,11 @@ def modal(model, speed_rpm: float = 0.0, loads: dict | None = None, *, state=Non
         V = band_basis(red.M, red.stiffness(s), n_modes, fmax_hz)
     Kc = red.speed_stiffness(bool(geometric_stiffness))
     if V is None:
-        lam, shapes = eigensolve(red.M, red.damping(s), red.stiffness(s), red.G, om, Kc)
+        lam, shapes = eigensolve(red.M, red.damping(s), red.stiffness(s), red.G, om, Kc,
+                                 red.K_speed)
     else:
-        lam, shapes = band_solve(V, red.M, red.damping(s), red.stiffness(s), red.G, om, Kc)
+        lam, shapes = band_solve(V, red.M, red.damping(s), red.stiffness(s), red.G, om, Kc,
+                                 red.K_speed)
     keep = np.ones(lam.size, dtype=bool)
     if fmax_hz is not None:
         keep &= np.abs(lam) <= 2 * math.pi * fmax_hz

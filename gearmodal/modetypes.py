@@ -11,8 +11,9 @@ diagrams use: ``tower FA<i>`` and ``tower SS<i>`` (fore-aft, side-to-side), ``dr
 (the shaft's torsion holds a quarter of the energy or more, or a coupled gearbox's torsion
 moves the rotor with a tenth of it) and the blade modes in multi-blade
 coordinates (Coleman): ``flap<i> collective``, ``flap<i> pitch`` (the cosine component: the
-rotor plane tilts about the horizontal), ``flap<i> yaw`` (the sine component), and the same
-for ``edge<i>``.
+rotor plane tilts about the horizontal), ``flap<i> yaw`` (the sine component), at speed
+``flap<i> FW`` and ``flap<i> BW`` (the asymmetric pattern whirling forward or backward), and the
+same for ``edge<i>``.
 """
 
 from __future__ import annotations
@@ -39,58 +40,85 @@ def dof_energy(asm, shapes: np.ndarray) -> np.ndarray:
 #: an elastic turbine's coordinates (the last part of a coupled name)
 _TOWER = re.compile(r"tower_(fa|ss)(\d+)$")
 _BLADE = re.compile(r"blade(\d+)_((?:flap|edge)\d+)$")
+#: multi-blade coordinates: the families they read as
+_MBC = re.compile(r"((?:flap|edge)\d+)_(collective|cos|sin)$")
 _SHAFT = ("shaft_twist", "generator_azimuth", "rotor_azimuth")
 
 
 @lru_cache(maxsize=32)
-def _turbine_groups(names: tuple):
+def turbine_groups(names: tuple):
     """``(turbine DOF indices, {tower label: indices}, shaft indices, {blade mode: (blade
-    numbers, indices)})`` or None when ``names`` has no elastic turbine."""
+    numbers, indices)}, {blade mode: {collective/cos/sin: index}})`` or None when ``names``
+    has no elastic turbine."""
     tower: dict[str, list[int]] = {}
     blades: dict[str, tuple[list[int], list[int]]] = {}
+    mbc: dict[str, dict[str, int]] = {}
     shaft: list[int] = []
     for i, n in enumerate(names):
         last = n.rsplit(".", 1)[-1]
         if (m := _TOWER.match(last)) is not None:
             tower.setdefault(f"tower {m.group(1).upper()}{m.group(2)}", []).append(i)
+        elif (m := _MBC.match(last)) is not None:
+            mbc.setdefault(m.group(1), {})[m.group(2)] = i
         elif (m := _BLADE.match(last)) is not None:
             nums, idx = blades.setdefault(m.group(2), ([], []))
             nums.append(int(m.group(1)))
             idx.append(i)
         elif last in _SHAFT or n.endswith(".rotor.theta"):  # a coupled gearbox's rotor too
             shaft.append(i)
-    if not blades and not tower:
+    if not blades and not tower and not mbc:
         return None
     every = sorted([i for v in tower.values() for i in v] + shaft
-                   + [i for _, v in blades.values() for i in v])
-    return np.array(every), tower, np.array(shaft, dtype=int), blades
+                   + [i for _, v in blades.values() for i in v]
+                   + [i for v in mbc.values() for i in v.values()])
+    return np.array(every), tower, np.array(shaft, dtype=int), blades, mbc
+
+
+#: ``|2 Im(conj(q_cos) q_sin)| / (|q_cos|^2 + |q_sin|^2)`` above which an asymmetric blade
+#: mode whirls (1: circular whirl; 0: a standing pitch or yaw pattern)
+WHIRL = 0.5
 
 
 def turbine_family(groups, shape: np.ndarray, share: np.ndarray) -> str:
     """The family of one mode of an elastic turbine (module docstring) from its ``shape``
-    and its DOFs' kinetic-energy ``share``; blade ``k`` of ``n`` sits at azimuth
-    ``2 pi (k - 1) / n`` (the assembly's azimuth 0)."""
-    _, tower, shaft, blades = groups
+    and its DOFs' kinetic-energy ``share``: the group holding the most energy (a tower mode,
+    a blade mode). A blade mode in multi-blade coordinates is ``collective``, or asymmetric:
+    whirling forward (``FW``: the pattern turns with the rotor, ``Im(conj(q_cos) q_sin) <
+    0``) or backward (``BW``), else standing, ``pitch`` (cosine) or ``yaw`` (sine). In blade
+    coordinates, blade ``k`` of ``n`` sits at azimuth ``2 pi (k - 1) / n`` (the assembly's
+    azimuth 0) and its Coleman components decide."""
+    _, tower, shaft, blades, mbc = groups
     if shaft.size and share[shaft].sum() >= 0.25:
         return "drivetrain"
     parts = {lab: share[idx].sum() for lab, idx in tower.items()}
     parts.update({mode: share[idx].sum() for mode, (_, idx) in blades.items()})
+    parts.update({mode: share[list(ix.values())].sum() for mode, ix in mbc.items()})
     best = max(parts, key=parts.get)
     if best in tower:
         return best
-    nums, idx = blades[best]
-    nb = max(nums)
-    psi = 2 * np.pi * (np.array(nums) - 1) / nb
-    q = shape[idx]
-    a0 = q.mean()
-    a1 = 2 / nb * (q * np.cos(psi)).sum()
-    b1 = 2 / nb * (q * np.sin(psi)).sum()
-    comp = {"collective": nb * abs(a0) ** 2, "pitch": nb / 2 * abs(a1) ** 2,
-            "yaw": nb / 2 * abs(b1) ** 2}
-    rest = max(float(np.sum(np.abs(q) ** 2)) - sum(comp.values()), 0.0)
-    if nb > 3 and rest > max(comp.values()):
-        return f"{best} differential"
-    return f"{best} {max(comp, key=comp.get)}"
+    if best in mbc:
+        ix = mbc[best]
+        a0, a1, b1 = (shape[ix[c]] if c in ix else 0.0 for c in ("collective", "cos", "sin"))
+        nb = 3
+    else:
+        nums, idx = blades[best]
+        nb = max(nums)
+        psi = 2 * np.pi * (np.array(nums) - 1) / nb
+        q = shape[idx]
+        a0 = q.mean()
+        a1 = 2 / nb * (q * np.cos(psi)).sum()
+        b1 = 2 / nb * (q * np.sin(psi)).sum()
+        rest = max(float(np.sum(np.abs(q) ** 2)) - nb * abs(a0) ** 2
+                   - nb / 2 * (abs(a1) ** 2 + abs(b1) ** 2), 0.0)
+        if nb > 3 and rest > max(nb * abs(a0) ** 2, nb / 2 * (abs(a1) ** 2 + abs(b1) ** 2)):
+            return f"{best} differential"
+    asym = abs(a1) ** 2 + abs(b1) ** 2
+    if 2 * abs(a0) ** 2 >= asym:  # the energies nb |a0|^2 against nb / 2 (|a1|^2 + |b1|^2)
+        return f"{best} collective"
+    whirl = 2 * float(np.imag(np.conj(a1) * b1)) / asym
+    if abs(whirl) > WHIRL:
+        return f"{best} {'FW' if whirl < 0 else 'BW'}"
+    return f"{best} {'pitch' if abs(a1) >= abs(b1) else 'yaw'}"
 
 
 class _Groups(NamedTuple):
@@ -165,7 +193,7 @@ def classify(asm, shapes: np.ndarray, freq_hz: np.ndarray, rigid_rel: float = 1e
         # the sum down its DOF rows, in DOF order, as np.bincount(stage_idx, weights=e[:, m])
         best = np.argmax(np.stack([e[g.stage_idx == k].sum(axis=0)
                                    for k in range(g.n_stages)]), axis=0).tolist()
-    turbine = _turbine_groups(tuple(asm.dof_names))
+    turbine = turbine_groups(tuple(asm.dof_names))
     types = []
     for m in range(shapes.shape[1]):
         if rigid[m]:

@@ -121,11 +121,8 @@ def equilibrium(model, loads: dict | None = None, speed_rpm: float = 0.0, *,
     full, _ = as_assembly(model)
     full.require_piecewise_linear("gm.equilibrium")
     asm, N = reduction(full)
-    check_speed = getattr(model, "check_speed", None)
-    if callable(check_speed):  # a model whose linearisation holds at rest only says so
-        check_speed(speed_rpm)
     om = float(speed_rpm) * RPM
-    K = asm.K + om**2 * asm.K_cent
+    K = asm.K + om**2 * asm.K_cent + om * asm.K_speed
     f = asm.load_vector(loads) + om**2 * asm.f_cent
     c = asm.contacts
     W, k, off = c.W, c.stiffness, c.offset

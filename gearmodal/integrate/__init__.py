@@ -155,9 +155,9 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     [['mesh', 'front', 'closed'], ['mesh', 'front', 'open']]
     """
     get_method(method, options)  # the name and its options checked
-    check_speed = getattr(model, "check_speed", None)
-    if callable(check_speed):  # a model whose linearisation holds at rest only says so
-        check_speed(speed_rpm)
+    check = getattr(model, "check_simulation", None)
+    if callable(check):  # a model that is not simulated at every speed says so
+        check(speed_rpm)
     n_steps = _output_steps(t_end, dt, speed_rpm, load_dt)
     omega = float(speed_rpm) * 2 * math.pi / 60  # the input azimuth is omega t
     asm, name, casm, geo = _assembly_of(model, omega, speed_rpm)
@@ -333,7 +333,7 @@ def _expand_coupled(result, model, casm, seg_systems, X, S, speed_rpm) -> None:
             K = c.variation.table(c.stiffness, om * result.t[k0:k1 + 1], om < 0)
         Fc = np.where(Ss, K * (Z @ c.W.T - c.offset) + c.damping * (Zd @ c.W.T), 0.0)
         rhs = (U @ red.B.T + om**2 * red.f_cent - Zd @ (red.C + om * red.G).T
-               - Z @ (red.K + om**2 * red.K_cent).T - Fc @ c.W)
+               - Z @ (red.K + om**2 * red.K_cent + om * red.K_speed).T - Fc @ c.W)
         Zdd = np.linalg.solve(red.M, rhs.T).T
         LAM[k0:k1 + 1] = seg_casm.multipliers(Q[k0:k1 + 1], V[k0:k1 + 1],
                                               seg_casm.expand(Zdd), U, Ss, om,

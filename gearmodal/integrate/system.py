@@ -123,7 +123,7 @@ class PiecewiseLinearSystem:
                 self.geometry = geometry
                 K, C = const["K"], const["C"]
                 W, off = const["contacts.W"], const["contacts.offset"]
-        self.K0 = K + om**2 * asm.K_cent
+        self.K0 = K + om**2 * asm.K_cent + om * asm.K_speed
         self.C0 = C + om * asm.G
         self.C_extra = None  # grounded
         self.K_extra = None  # grounded
@@ -211,7 +211,7 @@ class PiecewiseLinearSystem:
         v = self.geometry._values(float(azimuth))
         om = self.omega
         C0 = v["C"] + om * self.asm.G
-        K0 = v["K"] + om**2 * self.asm.K_cent
+        K0 = v["K"] + om**2 * self.asm.K_cent + om * self.asm.K_speed
         if self.C_extra is not None:
             C0 = C0 + self.C_extra
         if self.K_extra is not None:

@@ -11,6 +11,7 @@ import matplotlib
 
 matplotlib.use("Agg")  # reports are written without a screen
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from ..campbell import CampbellResult  # noqa: E402
@@ -149,6 +150,7 @@ def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
     f_low = LOW_FMAX_HZ if not len(housing) else max(LOW_FMAX_HZ, 3.0 * float(housing.min()))
     fig = camp.plot(fmax_hz=f_low, orders=low_orders)
     lpng = _png(fig, out / "campbell_low.png")
+    turbine = _turbine_zoom(camp, out)
     figs = _shape_figures(res, out)
     cr = camp.crossings()
     hmodes = sorted({int(j) for j in range(camp.n_modes)
@@ -170,6 +172,7 @@ def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
             _interactive(camp, res),
             "<h2>Low-frequency zoom: rotor orders and the gearbox housing modes</h2>",
             f"<img alt='campbell_low' src='data:image/png;base64,{lpng}'>",
+            *turbine,
             "<h3>Gearbox housing modes (housing on its suspension)</h3>",
             _table(htab) if len(htab) else "<p>no housing modes in this model</p>",
             "<p>Crossings of the housing modes with every order over the sweep "
@@ -189,6 +192,33 @@ def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
             _all_shapes(res, skip={int(n[5:7]) for n, _ in figs})]
     (out / "report.html").write_text(_page(camp.model_name, body))
     return out
+
+
+#: an elastic turbine's mode families (:func:`gearmodal.modetypes.turbine_family`)
+_TURBINE = ("tower ", "flap", "edge", "drivetrain")
+
+
+def _turbine_zoom(camp, out: Path) -> list[str]:
+    """The elastic turbine's own modes (tower, blades in multi-blade coordinates,
+    drivetrain) against the rotor orders (1P and the blade passing): figure
+    ``campbell_turbine.png`` and its crossings; nothing for a model without them."""
+    types = camp.mode_types
+    cols = [j for j in range(camp.n_modes)
+            if any(str(t).startswith(_TURBINE) for t in types[:, j])]
+    if not cols:
+        return []
+    top = 1.25 * float(np.max(camp.frequencies_hz[:, cols]))
+    rotor = [o for o in camp.orders if o.endswith("P")]
+    fig = camp.plot(fmax_hz=top, orders=rotor)
+    png = _png(fig, out / "campbell_turbine.png")
+    cr = camp.crossings()
+    cr = cr[cr["mode"].isin(cols) & cr.order.isin(rotor)]
+    return ["<h2>The turbine's modes: tower, blades (multi-blade coordinates: collective, "
+            "backward and forward whirl), drivetrain, and the rotor orders</h2>",
+            f"<img alt='campbell_turbine' src='data:image/png;base64,{png}'>",
+            "<p>Their crossings with the rotor orders (highlighted: inside the operating "
+            "range):</p>",
+            _table(cr, highlight=cr.in_operating_range) if len(cr) else "<p>none</p>"]
 
 
 def _page(title: str, body: list[str]) -> str:

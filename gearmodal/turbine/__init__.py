@@ -17,7 +17,7 @@ from .wind import Wind
 
 #: submodules loaded on first use (``gm.turbine.nrel5mw.flexible()``): they pull in the deck
 #: readers and pybmodes, which a gearbox-only session does not need
-_LAZY = ("nrel5mw", "structure", "bodies", "elastodyn")
+_LAZY = ("nrel5mw", "structure", "bodies", "elastodyn", "assumed_modes")
 
 
 def __getattr__(name: str):

@@ -91,6 +91,18 @@ class StructureDeck:
         return self.overhang * self.shaft_axis + np.array([0.0, 0.0, self.twr2shft])
 
 
+def elastodyn_of(fst) -> Path:
+    """The ElastoDyn main file an OpenFAST ``.fst`` names (its ``EDFile``), beside it."""
+    fst = Path(fst)
+    if not fst.is_file():
+        raise ModelError("deck", f"= {str(fst.parent)!r}: no {fst.name} there")
+    for line in fst.read_text(errors="replace").splitlines():
+        tok = line.split()
+        if len(tok) >= 2 and tok[1] == "EDFile":
+            return fst.parent / tok[0].strip('"')
+    raise ModelError("deck", f"{fst}: no EDFile line")
+
+
 def _pybmodes_reader():
     try:
         from pybmodes.io import elastodyn_reader

@@ -319,28 +319,26 @@ def simulate(wind: Wind, t_end: float, *, gearbox=None, deck: Deck | None = None
                                    controller=ctrl, progress=progress, **settings)
 
 
+#: rpm: the rotor's operating range, region 1.5's minimum speed to rated (the definition
+#: report, section 7; the drivetrain model's speed_range_rpm)
+OPERATING_RPM = (6.9, 12.1)
+
+
 def elastodyn_file(path=None) -> Path:
     """The ElastoDyn main file of the 5 MW deck at ``path`` (a folder holding
     ``NREL-5MW.fst``; default: the one the ``rosco`` wheel ships), named by its ``EDFile``."""
-    if path is None:
-        path = rosco_files()[1]
-    path = Path(path)
-    fst = path / "NREL-5MW.fst"
-    if not fst.is_file():
-        raise ModelError("deck", f"= {str(path)!r}: no NREL-5MW.fst there")
-    for line in fst.read_text(errors="replace").splitlines():
-        tok = line.split()
-        if len(tok) >= 2 and tok[1] == "EDFile":
-            return path / tok[0].strip('"')
-    raise ModelError("deck", f"{fst}: no EDFile line")
+    from .elastodyn import elastodyn_of
+
+    return elastodyn_of(Path(rosco_files()[1] if path is None else path) / "NREL-5MW.fst")
 
 
 def flexible(gearbox: Model | None = None, generator: str = "locked", *, deck=None,
              shapes: str = "computed", flap: int = 2, edge: int = 1, fore_aft: int = 2,
              side_to_side: int = 2):
     """The elastic NREL 5 MW turbine built from its OpenFAST deck (issue 56): tower, nacelle,
-    shaft, hub and three bending blades (:mod:`gearmodal.turbine.structure`), a model
-    :func:`gearmodal.modal` solves at 0 rpm.
+    shaft, hub and three bending blades (:mod:`gearmodal.turbine.structure`), a model that
+    :func:`gearmodal.modal` and :func:`gearmodal.campbell` solve at any rotor speed (the
+    operating range 6.9-12.1 rpm marked).
 
     Parameters
     ----------
@@ -362,4 +360,4 @@ def flexible(gearbox: Model | None = None, generator: str = "locked", *, deck=No
 
     return elastic_turbine(elastodyn_file(deck), gearbox=gearbox, generator=generator,
                            flap=flap, edge=edge, fore_aft=fore_aft, side_to_side=side_to_side,
-                           shapes=shapes)
+                           shapes=shapes, speed_range_rpm=OPERATING_RPM)

@@ -18,9 +18,9 @@ if not os.environ.get("GEARMODAL_CI") and (importlib.util.find_spec("rosco") is 
 
 import gearmodal as gm  # noqa: E402
 from gearmodal.turbine import nrel5mw  # noqa: E402
+from gearmodal.turbine.assumed_modes import parked_matrices, turning_matrices  # noqa: E402
 from gearmodal.turbine.bodies import blade_modes, tower_modes  # noqa: E402
 from gearmodal.turbine.elastodyn import read_structure  # noqa: E402
-from gearmodal.turbine.structure import structure_matrices  # noqa: E402
 
 #: Jonkman et al. (2009), NREL/TP-500-38060, Table 9-1: full-system natural frequencies (Hz)
 #: of the land-based 5 MW turbine, rotor parked at 0 rpm, generator locked; the FAST column.
@@ -113,7 +113,8 @@ def test_the_rotor_inertia_is_the_hub_and_the_coned_blades(deck):
     integrated independently here on a fine grid (1e-6)."""
     blade = blade_modes(deck)
     tower = tower_modes(deck)
-    names, M, _, _ = structure_matrices(deck, blade, tower, generator=None, gravity=0.0)
+    mat = parked_matrices(deck, blade, tower, generator=None, gravity=0.0)
+    names, M = mat.dof_names, mat.M
     bf = gm.turbine.elastodyn.read_blade_file(deck)
     s = np.linspace(0.0, deck.blade_length, 200001)
     m = np.interp(s, np.asarray(bf.bl_fract) * deck.blade_length,
@@ -129,7 +130,8 @@ def test_an_isolated_body_has_pybmodes_frequencies(deck):
     and stiffness give pybmodes' frequencies to 0.3 % (the quadrature of the mass per length
     against pybmodes' consistent mass)."""
     blade = blade_modes(deck, flap=2, edge=1)
-    names, M, _, K = structure_matrices(deck, blade, tower_modes(deck), gravity=0.0)
+    mat = parked_matrices(deck, blade, tower_modes(deck), gravity=0.0)
+    names, M, K = mat.dof_names, mat.M, mat.K
     idx = [names.index(f"blade1_{m}") for m in blade.names]
     w2 = eigh(K[np.ix_(idx, idx)], M[np.ix_(idx, idx)], eigvals_only=True)
     got = np.sort(np.sqrt(w2) / (2 * math.pi))
@@ -141,10 +143,10 @@ def test_a_parked_rotor_has_the_same_modes_at_every_azimuth(deck, azimuth):
     """Three equal blades at 120 degrees: the parked turbine's frequencies do not depend on
     where blade 1 stands (the multi-blade sums of cos^2 and sin cos are constant), to 1e-9."""
     blade, tower = blade_modes(deck), tower_modes(deck)
-    _, M0, _, K0 = structure_matrices(deck, blade, tower)
-    _, M1, _, K1 = structure_matrices(deck, blade, tower, azimuth=azimuth)
-    w0 = eigh(K0, M0, eigvals_only=True)
-    w1 = eigh(K1, M1, eigvals_only=True)
+    a, b = parked_matrices(deck, blade, tower), parked_matrices(deck, blade, tower,
+                                                               azimuth=azimuth)
+    w0 = eigh(a.K, a.M, eigvals_only=True)
+    w1 = eigh(b.K, b.M, eigvals_only=True)
     assert w1 == pytest.approx(w0, rel=1e-9)
 
 
@@ -157,9 +159,9 @@ def test_gravity_softens_the_tower_as_pybmodes_finds(deck):
     blade, tower = blade_modes(deck), tower_modes(deck)
 
     def fa1(g):
-        names, M, _, K = structure_matrices(deck, blade, tower, gravity=g)
-        w2, V = eigh(K, M)
-        j = names.index("tower_fa1")
+        mat = parked_matrices(deck, blade, tower, gravity=g)
+        w2, V = eigh(mat.K, mat.M)
+        j = mat.dof_names.index("tower_fa1")
         k = int(np.argmax(np.abs(V[j, :6])))
         return math.sqrt(w2[k])
 
@@ -173,12 +175,11 @@ def test_gravity_softens_the_tower_as_pybmodes_finds(deck):
     assert ours == pytest.approx(theirs, rel=0.2)
 
 
-def test_the_parked_model_refuses_a_speed():
+def test_the_elastic_turbine_is_simulated_parked_only():
+    """Its modes come at any speed; a time run at speed (its aeroelastic loads) is refused."""
     et = nrel5mw.flexible()
     with pytest.raises(gm.ModelError, match=r"speed_rpm = 12\.1.*parked"):
-        gm.modal(et, 12.1)
-    with pytest.raises(gm.ModelError, match=r"speed_rpm.*parked"):
-        gm.campbell(et, [0.0, 6.0, 12.0])
+        gm.simulate(et, 0.01, dt=1e-3, speed_rpm=12.1)
 
 
 @pytest.mark.parametrize("kw, match", [
@@ -198,3 +199,194 @@ def test_a_missing_deck_is_named(tmp_path):
         nrel5mw.flexible(deck=tmp_path)
     with pytest.raises(gm.ModelError, match="no such ElastoDyn file"):
         gm.turbine.structure.elastic_turbine(tmp_path / "missing.dat")
+
+
+RATED = 12.1 * math.pi / 30  # rad/s
+
+
+def state_roots(mat, om):
+    """Eigenvalues of ``M x'' + (C + om G) x' + (K + om K_speed + om^2 K_cent) x = 0`` by a
+    dense first-order solve of the matrices themselves (independent of gm.modal)."""
+    n = mat.M.shape[0]
+    Minv = np.linalg.inv(mat.M)
+    K = mat.K + om * mat.K_speed + om**2 * mat.K_cent
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ (mat.C + om * mat.G)]])
+    return np.linalg.eigvals(A)
+
+
+@pytest.fixture(scope="module")
+def bodies(deck):
+    return blade_modes(deck), tower_modes(deck)
+
+
+def test_multi_blade_coordinates_at_rest_are_the_blades_own(deck, bodies):
+    """Parked, the multi-blade coordinates are a change of coordinates: the same
+    frequencies as each blade's own (1e-12)."""
+    a, b = parked_matrices(deck, *bodies), turning_matrices(deck, *bodies)
+    wa = eigh(a.K, a.M, eigvals_only=True)
+    wb = eigh(b.K, b.M, eigvals_only=True)
+    assert wb == pytest.approx(wa, rel=1e-12)
+
+
+def test_the_turning_rotor_is_time_invariant_in_multi_blade_coordinates(deck, bodies):
+    """Three equal blades: every matrix, the speed terms included, is the same at any azimuth
+    (the azimuth harmonics of the products sum to constants; measured 3e-12 of the largest
+    entry), G is skew and K_cent symmetric (1e-12)."""
+    a = turning_matrices(deck, *bodies)
+    b = turning_matrices(deck, *bodies, azimuth=0.37)
+    for name in ("M", "C", "K", "G", "K_cent", "K_speed"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert np.max(np.abs(x - y)) <= 1e-10 * np.max(np.abs(x)), name
+    assert np.max(np.abs(a.G + a.G.T)) <= 1e-12 * np.max(np.abs(a.G))
+    assert np.max(np.abs(a.K_cent - a.K_cent.T)) <= 1e-12 * np.max(np.abs(a.K_cent))
+
+
+def test_the_turning_blade_stiffens_as_pybmodes_finds(deck, bodies):
+    """The collective blade modes on a held hub at the deck's 12.1 rpm (centrifugal
+    stiffening on the parked shapes, spin softening, Coriolis) against pybmodes' finite-element
+    blade turning at that speed: within 0.3 % (measured 0.1 %: the parked shapes are a good
+    basis at speed)."""
+    from pybmodes.models import RotatingBlade
+
+    blade, _ = bodies
+    mat = turning_matrices(deck, *bodies)
+    idx = [mat.dof_names.index(f"{m}_collective") for m in blade.names]
+    K = (mat.K + RATED**2 * mat.K_cent)[np.ix_(idx, idx)]
+    got = np.sort(np.sqrt(eigh(K, mat.M[np.ix_(idx, idx)], eigvals_only=True)) / (2 * math.pi))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        want = RotatingBlade.from_elastodyn(deck.path).run(n_modes=6, check_model=False)
+    assert deck.rated_rotor_speed_rpm == 12.1
+    assert got == pytest.approx(np.sort(want.frequencies[:3]), rel=3e-3)
+
+
+def test_asymmetric_modes_on_a_held_hub_whirl_at_plus_and_minus_the_speed(deck, bodies):
+    """Bir (2008): on a held hub the fixed frame sees each rotating blade mode at its
+    frequency plus and minus the rotor speed (forward and backward whirl), to 1e-9."""
+    blade, _ = bodies
+    mat = turning_matrices(deck, *bodies)
+
+    def sub(names):
+        idx = [mat.dof_names.index(n) for n in names]
+        return type(mat)(names, *(getattr(mat, k)[np.ix_(idx, idx)]
+                                  for k in ("M", "C", "K", "G", "K_cent", "K_speed")))
+
+    col = sub([f"{m}_collective" for m in blade.names])
+    asym = sub([f"{m}_{c}" for m in blade.names for c in ("cos", "sin")])
+    for m in (col, asym):  # undamped: the roots are +-i omega
+        m.C[:] = 0.0
+        m.K_speed[:] = 0.0
+
+    def omegas(m):
+        lam = state_roots(m, RATED)
+        return np.sort(lam.imag[lam.imag > 0])
+
+    w = omegas(col)  # the rotating blade's (a collective pattern does not whirl)
+    want = np.sort(np.concatenate([w + RATED, np.abs(w - RATED)]))
+    assert omegas(asym) == pytest.approx(want, rel=1e-9)
+
+
+def test_the_free_rotor_stays_neutral_at_every_speed():
+    """Generator free: over 0-13 rpm no root grows (the largest real part below 1e-7 of the
+    largest root) and the rigid rotation stays at zero, through gm.campbell."""
+    et = nrel5mw.flexible(generator="free")
+    for rpm in (0.0, 6.9, 12.1, 13.0):
+        lam = state_roots(et.systems["turbine"], rpm * math.pi / 30)
+        big = np.max(np.abs(lam))
+        assert np.max(lam.real) <= 1e-7 * big, rpm
+        assert np.min(np.abs(lam)) <= 1e-7 * big, rpm
+    c = gm.campbell(et, np.linspace(0.0, 13.0, 4))
+    assert c.frequencies_hz[:, 0] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_the_campbell_diagram_has_the_designers_crossings():
+    """The parked-to-rated Campbell diagram (generator locked, the deck's drivetrain): the
+    asymmetric blade modes split into backward and forward whirl about the collective, the
+    first flap's 2 Omega apart (within 10 %: the tower takes part), and 3P crosses the first
+    tower modes at 6.2 rpm, just below the 6.9 rpm the controller keeps as its minimum speed
+    (outside the operating range); every mode is labelled by family at every speed."""
+    c = gm.campbell(nrel5mw.flexible(), np.linspace(0.0, 13.0, 27), n_modes=14)
+    df = c.to_frame()
+    assert not (df.mode_type == "mixed").any()
+    at = df[np.isclose(df.speed_rpm, 12.0)].set_index("mode_type").frequency_hz
+    assert at["flap1 BW"] < at["flap1 collective"] < at["flap1 FW"]
+    assert at["edge1 BW"] < at["edge1 FW"]
+    assert at["flap1 FW"] - at["flap1 BW"] == pytest.approx(2 * 12.0 / 60, rel=0.1)
+    cross = c.crossings()
+    tower = cross[cross.mode_type.isin(["tower FA1", "tower SS1"]) & (cross.order == "3P")]
+    assert len(tower) == 2
+    assert tower.speed_rpm.to_numpy() == pytest.approx(6.2, abs=0.1)
+    assert not tower.in_operating_range.any()
+
+
+def test_the_model_file_builds_the_same_turbine(gearbox):
+    """studies/models/nrel5mw_elastic.toml: the deck, the gearbox file beside it, the free
+    generator; the same modes as the Python call, to rounding."""
+    from gearmodal.turbine.structure import load_elastic_turbine
+
+    et = load_elastic_turbine("studies/models/nrel5mw_elastic.toml")
+    assert et.speed_range_rpm == (6.9, 12.1)
+    a = gm.modal(et, 12.1, n_modes=16)
+    b = gm.modal(nrel5mw.flexible(gearbox=gearbox, generator="free"), 12.1, n_modes=16)
+    assert a.frequencies_hz[1:] == pytest.approx(b.frequencies_hz[1:], rel=1e-9)
+    assert a.mode_types == b.mode_types
+
+
+@pytest.mark.parametrize("text, match", [
+    ('[elastic_turbine]\ndeck = "nrel5mw"\nblades = 3\n', r"elastic_turbine\.blades.*no such"),
+    ('[elastic_turbine]\n', r"elastic_turbine\.deck"),
+    ('[elastic_turbine]\ndeck = "missing.dat"\n', r"no such ElastoDyn file"),
+    ('[elastic_turbine]\ndeck = "nrel5mw"\nspeed_range_rpm = [12, 6]\n',
+     r"speed_range_rpm.*increasing"),
+])
+def test_a_bad_turbine_file_is_named(tmp_path, text, match):
+    from gearmodal.turbine.structure import load_elastic_turbine
+
+    p = tmp_path / "t.toml"
+    p.write_text(text)
+    with pytest.raises(gm.ModelError, match=match):
+        load_elastic_turbine(p)
+
+
+def test_the_command_line_writes_the_turbines_campbell_report(tmp_path):
+    """``gearmodal campbell nrel5mw_elastic`` (three speeds): the report with the turbine's
+    view and the crossings of its families with the rotor orders."""
+    import pandas as pd
+
+    from gearmodal.cli import main
+
+    assert main(["campbell", "nrel5mw_elastic", "--speeds", "0:13:3", "--out",
+                 str(tmp_path / "c"), "--quiet"]) == 0
+    assert (tmp_path / "c" / "campbell_turbine.png").is_file()
+    html = (tmp_path / "c" / "report.html").read_text()
+    assert "multi-blade coordinates" in html
+    types = set(pd.read_csv(tmp_path / "c" / "campbell.csv").mode_type)
+    assert {"tower FA1", "tower SS1", "drivetrain", "flap1 collective", "flap1 BW"} <= types
+
+
+def test_the_whirling_blades_decay_as_the_turning_blade(deck, bodies):
+    """The blades' structural damping acts on their rotating-frame rates: on a held hub the
+    whirling modes of the fixed frame decay at exactly the rotating blade's rates (their real
+    parts), which the speed-proportional term ``K_speed`` makes so (without it they would not),
+    to 1e-9."""
+    blade, _ = bodies
+    mat = turning_matrices(deck, *bodies)
+
+    def sub(names, keep_speed=True):
+        idx = [mat.dof_names.index(n) for n in names]
+        parts = [getattr(mat, k)[np.ix_(idx, idx)]
+                 for k in ("M", "C", "K", "G", "K_cent", "K_speed")]
+        if not keep_speed:
+            parts[5] = np.zeros_like(parts[5])
+        return type(mat)(names, *parts)
+
+    col = sub([f"{m}_collective" for m in blade.names])
+    asym = [f"{m}_{c}" for m in blade.names for c in ("cos", "sin")]
+
+    def decay(m):
+        lam = state_roots(m, RATED)
+        return np.sort(np.unique(np.round(lam.real, 12)))
+
+    want = decay(col)
+    assert decay(sub(asym)) == pytest.approx(want, rel=1e-9)
+    assert decay(sub(asym, keep_speed=False)) != pytest.approx(want, rel=1e-3)
