@@ -43,6 +43,7 @@ _BLADE = re.compile(r"blade(\d+)_((?:flap|edge)\d+)$")
 #: multi-blade coordinates: the families they read as
 _MBC = re.compile(r"((?:flap|edge)\d+)_(collective|cos|sin)$")
 _SHAFT = ("shaft_twist", "generator_azimuth", "rotor_azimuth")
+_YAW = "nacelle_yaw"
 
 
 @lru_cache(maxsize=32)
@@ -58,6 +59,8 @@ def turbine_groups(names: tuple):
         last = n.rsplit(".", 1)[-1]
         if (m := _TOWER.match(last)) is not None:
             tower.setdefault(f"tower {m.group(1).upper()}{m.group(2)}", []).append(i)
+        elif last == _YAW:
+            tower.setdefault("nacelle yaw", []).append(i)
         elif (m := _MBC.match(last)) is not None:
             mbc.setdefault(m.group(1), {})[m.group(2)] = i
         elif (m := _BLADE.match(last)) is not None:

@@ -195,7 +195,7 @@ def write_campbell_report(camp: CampbellResult, res: ModalResult, out,
 
 
 #: an elastic turbine's mode families (:func:`gearmodal.modetypes.turbine_family`)
-_TURBINE = ("tower ", "flap", "edge", "drivetrain")
+_TURBINE = ("tower ", "flap", "edge", "drivetrain", "nacelle")
 
 
 def _turbine_zoom(camp, out: Path) -> list[str]:

@@ -4,7 +4,8 @@
 Coordinates: ``tower_fa<i>``, ``tower_ss<i>`` (the tower's modes, :mod:`.bodies`); the
 rotor's rotation, ``shaft_twist`` against the generator on the deck's torsional spring or
 ``rotor_azimuth`` when a gearbox model carries shaft and generator; ``generator_azimuth``
-(``generator="free"``, on the low-speed side); the blades' modes, each blade's
+(``generator="free"``, on the low-speed side); ``nacelle_yaw`` (the nacelle turning on its yaw
+bearing's spring, when one is given); the blades' modes, each blade's
 (``blade<k>_flap1`` ...: :func:`parked_matrices`) or in multi-blade coordinates
 (``flap1_collective``, ``flap1_cos``, ``flap1_sin`` ...: :func:`turning_matrices`), with
 ``q_k = q_collective + q_cos cos(psi_k) + q_sin sin(psi_k)`` for blade ``k`` at azimuth
@@ -37,8 +38,7 @@ structural damping, acting on their rotating-frame rates, adds ``Omega T^T C_b T
 
 Left out: the blades' own weight (it depends on their azimuth: a standing blade is softened,
 a hanging one stiffened), the second-order gravity terms of the rotor-nacelle assembly's
-horizontal offset, the steady deflection under the centrifugal load, tower torsion and yaw
-(the deck has no yaw spring).
+horizontal offset, the steady deflection under the centrifugal load, tower torsion.
 """
 
 from __future__ import annotations
@@ -89,10 +89,13 @@ class _Frame:
     generator, drivetrain and the tower's gravity (module docstring)."""
 
     def __init__(self, deck: StructureDeck, blade: BeamModes, tower: BeamModes,
-                 generator: str | None, gravity: float, blade_names: list[str]):
+                 generator: str | None, gravity: float, blade_names: list[str],
+                 yaw: tuple[float, float] | None = None):
         if generator is not None and generator not in GENERATOR:
             raise ModelError("generator", f"= {generator!r}: one of {', '.join(GENERATOR)}")
         names = [f"tower_{m}" for m in tower.names]
+        if yaw is not None:
+            names.append("nacelle_yaw")
         names.append("rotor_azimuth" if generator is None else "shaft_twist")
         if generator == "free":
             names.append("generator_azimuth")
@@ -111,6 +114,11 @@ class _Frame:
         self.theta = th = np.zeros((3, n))
         uT[0, tw], uT[1, tw] = tower.tip()[:, 0], tower.tip()[:, 1]
         th[0, tw], th[1, tw] = -tower.tip_slope()[:, 1], tower.tip_slope()[:, 0]
+        if yaw is not None:  # the yaw bearing: the nacelle turns about the tower's axis
+            j = ix["nacelle_yaw"]
+            th[2, j] = 1.0
+            self.K[j, j] += yaw[0]
+            self.C[j, j] += yaw[1]
         # the nacelle: a point mass (ElastoDyn gives no inertia but the yaw's)
         rN = np.array(deck.nacelle_cm, dtype=float)
         JN = self.rigid(rN)
@@ -191,14 +199,17 @@ class _Frame:
 
 def parked_matrices(deck: StructureDeck, blade: BeamModes, tower: BeamModes, *,
                     generator: str | None = "locked", azimuth: float = 0.0,
-                    gravity: float = GRAVITY) -> TurbineMatrices:
+                    gravity: float = GRAVITY,
+                    yaw: tuple[float, float] | None = None) -> TurbineMatrices:
     """The parked turbine in each blade's own coordinates (``blade<k>_<mode>``) with blade 1
     at ``azimuth`` (rad, 0: up). ``generator``: ``"locked"``, ``"free"`` (the deck's
     drivetrain) or None (``rotor_azimuth`` free: a gearbox model supplies the drivetrain).
-    The speed terms are zero (a parked rotor)."""
+    ``yaw``: ``(stiffness N m/rad, damping N m s/rad)`` of the yaw bearing, the coordinate
+    ``nacelle_yaw`` (None: the nacelle held in yaw). The speed terms are zero (a parked
+    rotor)."""
     nb = deck.blades
     bnames = [f"blade{k + 1}_{m}" for k in range(nb) for m in blade.names]
-    f = _Frame(deck, blade, tower, generator, gravity, bnames)
+    f = _Frame(deck, blade, tower, generator, gravity, bnames, yaw)
     n = len(f.names)
     for k in range(nb):
         cols = [f.ix[f"blade{k + 1}_{m}"] for m in blade.names]
@@ -216,7 +227,8 @@ MBC = ("collective", "cos", "sin")
 
 def turning_matrices(deck: StructureDeck, blade: BeamModes, tower: BeamModes, *,
                      generator: str | None = "locked", azimuth: float = 0.0,
-                     gravity: float = GRAVITY) -> TurbineMatrices:
+                     gravity: float = GRAVITY,
+                     yaw: tuple[float, float] | None = None) -> TurbineMatrices:
     """The turbine in multi-blade coordinates with its speed terms (module docstring,
     (L1)-(L3)), blade 1 at ``azimuth``: constant in time for three equal blades (the test
     compares azimuths). Three blades only."""
@@ -225,7 +237,7 @@ def turning_matrices(deck: StructureDeck, blade: BeamModes, tower: BeamModes, *,
         raise ModelError("deck.NumBl", f"= {nb}: multi-blade coordinates here are for three "
                          "blades")
     bnames = [f"{m}_{c}" for m in blade.names for c in MBC]
-    f = _Frame(deck, blade, tower, generator, gravity, bnames)
+    f = _Frame(deck, blade, tower, generator, gravity, bnames, yaw)
     n = len(f.names)
     cols = np.array([[f.ix[f"{m}_{c}"] for c in MBC] for m in blade.names])  # (modes, 3)
     K_b, C_b = blade.stiffness, blade.damping_matrix()

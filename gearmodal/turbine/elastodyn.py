@@ -103,6 +103,35 @@ def elastodyn_of(fst) -> Path:
     raise ModelError("deck", f"{fst}: no EDFile line")
 
 
+def servodyn_yaw(fst) -> tuple[float, float]:
+    """``(YawSpr, YawDamp)``: the yaw bearing's spring (N m/rad) and damper (N m s/rad) from the
+    ServoDyn file an OpenFAST ``.fst`` names (its ``ServoFile``)."""
+    fst = Path(fst)
+    if not fst.is_file():
+        raise ModelError("deck", f"= {str(fst.parent)!r}: no {fst.name} there")
+    servo = None
+    for line in fst.read_text(errors="replace").splitlines():
+        tok = line.split()
+        if len(tok) >= 2 and tok[1] == "ServoFile":
+            servo = fst.parent / tok[0].strip('"')
+    if servo is None or not servo.is_file():
+        raise ModelError("deck", f"{fst.name}: no ServoDyn file (ServoFile) beside it")
+    found: dict[str, float] = {}
+    for line in servo.read_text(errors="replace").splitlines():
+        tok = line.split()
+        if len(tok) >= 2 and tok[1] in ("YawSpr", "YawDamp"):
+            try:
+                found[tok[1]] = float(tok[0].replace("D", "E"))
+            except ValueError:
+                raise ModelError(f"deck.{tok[1]}", f"= {tok[0]!r} in {servo.name}: not a "
+                                 "number") from None
+    for key in ("YawSpr", "YawDamp"):
+        if key not in found:
+            raise ModelError(f"deck.{key}", f"missing in {servo.name}")
+    return (_positive("deck.YawSpr", found["YawSpr"]),
+            _positive("deck.YawDamp", found["YawDamp"], allow_zero=True))
+
+
 def _pybmodes_reader():
     try:
         from pybmodes.io import elastodyn_reader

@@ -329,12 +329,16 @@ def elastodyn_file(path=None) -> Path:
     ``NREL-5MW.fst``; default: the one the ``rosco`` wheel ships), named by its ``EDFile``."""
     from .elastodyn import elastodyn_of
 
-    return elastodyn_of(Path(rosco_files()[1] if path is None else path) / "NREL-5MW.fst")
+    return elastodyn_of(_fst(path))
+
+
+def _fst(path=None) -> Path:
+    return Path(rosco_files()[1] if path is None else path) / "NREL-5MW.fst"
 
 
 def flexible(gearbox: Model | None = None, generator: str = "locked", *, deck=None,
              shapes: str = "computed", flap: int = 2, edge: int = 1, fore_aft: int = 2,
-             side_to_side: int = 2):
+             side_to_side: int = 2, yaw: bool = True):
     """The elastic NREL 5 MW turbine built from its OpenFAST deck (issue 56): tower, nacelle,
     shaft, hub and three bending blades (:mod:`gearmodal.turbine.structure`), a model that
     :func:`gearmodal.modal` and :func:`gearmodal.campbell` solve at any rotor speed (the
@@ -349,6 +353,8 @@ def flexible(gearbox: Model | None = None, generator: str = "locked", *, deck=No
     deck : the folder holding ``NREL-5MW.fst`` (default: the ``rosco`` wheel's).
     shapes, flap, edge, fore_aft, side_to_side : the assumed modes
         (:func:`gearmodal.turbine.structure.elastic_turbine`).
+    yaw : the nacelle turns on its yaw bearing (ServoDyn's YawSpr 9.03e9 N m/rad and YawDamp
+        1.92e7 N m s/rad), as the deck has it (``YawDOF``); False: held in yaw.
 
     Examples
     --------
@@ -356,8 +362,11 @@ def flexible(gearbox: Model | None = None, generator: str = "locked", *, deck=No
     >>> res = gm.modal(gm.turbine.nrel5mw.flexible())           # doctest: +SKIP
     >>> res.to_frame()[["frequency_hz", "mode_type"]].head(3)    # doctest: +SKIP
     """
+    from .elastodyn import servodyn_yaw
     from .structure import elastic_turbine
 
+    k_yaw, c_yaw = servodyn_yaw(_fst(deck)) if yaw else (None, 0.0)
     return elastic_turbine(elastodyn_file(deck), gearbox=gearbox, generator=generator,
                            flap=flap, edge=edge, fore_aft=fore_aft, side_to_side=side_to_side,
-                           shapes=shapes, speed_range_rpm=OPERATING_RPM)
+                           shapes=shapes, speed_range_rpm=OPERATING_RPM,
+                           yaw_stiffness=k_yaw, yaw_damping=c_yaw)

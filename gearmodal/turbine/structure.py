@@ -37,7 +37,8 @@ class ElasticTurbine(Coupled):
     model.
 
     ``speed_range_rpm``: the operating range the Campbell diagram marks (default: the
-    gearbox model's; none without one).
+    gearbox model's; none without one). ``yaw_stiffness``, ``yaw_damping``: the yaw bearing
+    (N m/rad, N m s/rad), the coordinate ``nacelle_yaw``; None: the nacelle held in yaw.
 
     Its ``deck`` is the :class:`~gearmodal.turbine.elastodyn.StructureDeck`, ``blade`` and
     ``tower`` their :class:`~gearmodal.turbine.bodies.BeamModes`, ``generator`` ``"locked"`` or
@@ -47,16 +48,27 @@ class ElasticTurbine(Coupled):
     def __init__(self, deck: StructureDeck, blade: BeamModes, tower: BeamModes, *,
                  generator: str = "locked", gearbox: Model | None = None,
                  gravity: float = GRAVITY, name: str = "elastic turbine",
-                 speed_range_rpm: tuple[float, float] | None = None):
+                 speed_range_rpm: tuple[float, float] | None = None,
+                 yaw_stiffness: float | None = None, yaw_damping: float = 0.0):
         g = float(gravity)
         if not math.isfinite(g) or g < 0:
             raise ModelError("gravity", f"= {gravity!r}: must be a finite number >= 0 m/s^2")
         if generator not in GENERATOR:
             raise ModelError("generator", f"= {generator!r}: one of {', '.join(GENERATOR)}")
+        yaw = None
+        if yaw_stiffness is not None:
+            k, c = float(yaw_stiffness), float(yaw_damping)
+            if not math.isfinite(k) or k <= 0:
+                raise ModelError("yaw_stiffness", f"= {yaw_stiffness!r}: a finite stiffness "
+                                 "> 0 N m/rad (None: the nacelle held in yaw)")
+            if not math.isfinite(c) or c < 0:
+                raise ModelError("yaw_damping", f"= {yaw_damping!r}: a finite damping >= 0 "
+                                 "N m s/rad")
+            yaw = (k, c)
         self.deck, self.blade, self.tower = deck, blade, tower
         self.generator, self.gravity, self.gearbox = generator, g, gearbox
         if gearbox is None:
-            mat = turning_matrices(deck, blade, tower, generator=generator, gravity=g)
+            mat = turning_matrices(deck, blade, tower, generator=generator, gravity=g, yaw=yaw)
             super().__init__([_system(mat)], [], name=name)
             self.rated_speed_rpm = deck.rated_rotor_speed_rpm or None
             self.speed_range_rpm = speed_range_rpm
@@ -66,7 +78,7 @@ class ElasticTurbine(Coupled):
                              f"{type(gearbox).__name__}")
         rotor = _body_with_role(gearbox, "rotor")
         gen = _body_with_role(gearbox, "generator")
-        mat = turning_matrices(deck, blade, tower, generator=None, gravity=g)
+        mat = turning_matrices(deck, blade, tower, generator=None, gravity=g, yaw=yaw)
         j = mat.dof_names.index("rotor_azimuth")
         mat.M[j, j] -= float(gearbox.bodies[rotor].inertia)
         constraints = [LinearConstraint("hub", {"turbine.rotor_azimuth": 1.0,
@@ -136,7 +148,9 @@ def _body_with_role(model: Model, role: str) -> str:
 def elastic_turbine(deck_path, *, gearbox: Model | None = None, generator: str = "locked",
                     flap: int = 2, edge: int = 1, fore_aft: int = 2, side_to_side: int = 2,
                     shapes: str = "computed", gravity: float = GRAVITY,
-                    speed_range_rpm: tuple[float, float] | None = None) -> ElasticTurbine:
+                    speed_range_rpm: tuple[float, float] | None = None,
+                    yaw_stiffness: float | None = None,
+                    yaw_damping: float = 0.0) -> ElasticTurbine:
     """The elastic turbine of the ElastoDyn deck at ``deck_path`` (its main file).
 
     Parameters
@@ -151,18 +165,22 @@ def elastic_turbine(deck_path, *, gearbox: Model | None = None, generator: str =
         deck's polynomial shapes; :mod:`gearmodal.turbine.bodies`).
     gravity : m/s^2 (0: no gravity stiffness).
     speed_range_rpm : the operating range (rpm) the Campbell diagram marks.
+    yaw_stiffness, yaw_damping : the yaw bearing, N m/rad and N m s/rad (ServoDyn's YawSpr,
+        YawDamp); None: the nacelle held in yaw (Table 9-1's case).
     """
     deck = read_structure(deck_path)
     return ElasticTurbine(deck, blade_modes(deck, flap, edge, shapes),
                           tower_modes(deck, fore_aft, side_to_side, shapes),
                           generator=generator, gearbox=gearbox, gravity=gravity,
-                          speed_range_rpm=speed_range_rpm)
+                          speed_range_rpm=speed_range_rpm, yaw_stiffness=yaw_stiffness,
+                          yaw_damping=yaw_damping)
 
 
 #: the fields of an elastic turbine file's ``[elastic_turbine]`` table and their defaults
 FILE_FIELDS = {"name": "elastic turbine", "deck": None, "gearbox": None,
                "generator": "locked", "shapes": "computed", "flap": 2, "edge": 1,
-               "fore_aft": 2, "side_to_side": 2, "gravity": GRAVITY, "speed_range_rpm": None}
+               "fore_aft": 2, "side_to_side": 2, "gravity": GRAVITY, "speed_range_rpm": None,
+               "yaw_stiffness": None, "yaw_damping": 0.0}
 
 
 def load_elastic_turbine(path) -> ElasticTurbine:
@@ -218,7 +236,8 @@ def load_elastic_turbine(path) -> ElasticTurbine:
     et = elastic_turbine(deck, gearbox=gearbox, generator=f["generator"], flap=f["flap"],
                          edge=f["edge"], fore_aft=f["fore_aft"],
                          side_to_side=f["side_to_side"], shapes=f["shapes"],
-                         gravity=f["gravity"], speed_range_rpm=rng)
+                         gravity=f["gravity"], speed_range_rpm=rng,
+                         yaw_stiffness=f["yaw_stiffness"], yaw_damping=f["yaw_damping"])
     et.name = str(f["name"])
     return et
 
