@@ -16,6 +16,7 @@ if not os.environ.get("GEARMODAL_CI") and (importlib.util.find_spec("rosco") is 
 
 from scipy.optimize import brentq  # noqa: E402
 
+import gearmodal as gm  # noqa: E402
 from gearmodal.turbine import nrel5mw  # noqa: E402
 
 #: the blade's aerodynamic stations, m from the rotor centre (Jonkman et al. 2009, Table 2-1)
@@ -215,3 +216,25 @@ def test_double_contact_study_on_the_5mw_drivetrain(tmp_path):
     eff = pd.read_csv(out / "effects.csv")
     assert set(eff.effect) == {"clearance / reference", "clearance_3point / reference"}
     assert len(pd.read_csv(out / "runs.csv")) == 6 and (out / "report.html").exists()
+
+
+@pytest.mark.parametrize("kw, match", [({"t_end": float("inf")}, r"t_end = inf"),
+                                       ({"dt": 0.0}, r"dt = 0\.0"),
+                                       ({"t_end": 1e9}, r"more than 1e8")])
+def test_a_bad_controlled_run_is_named(kw, match):
+    with pytest.raises(gm.ModelError, match=match):
+        nrel5mw.controlled_run(8.0, **kw)
+
+
+def test_a_damaged_deck_is_named(tmp_path):
+    """An ElastoDyn file cut short: a ModelError naming the deck, not the reader's
+    IndexError."""
+    import shutil
+
+    src = nrel5mw.rosco_files()[1]
+    dst = tmp_path / "deck"
+    shutil.copytree(src, dst)
+    ed = dst / "NRELOffshrBsline5MW_Onshore_ElastoDyn.dat"
+    ed.write_text("\n".join(ed.read_text().splitlines()[:30]) + "\n")
+    with pytest.raises(gm.ModelError, match=r"deck = .*could not read"):
+        nrel5mw.read_deck(dst)

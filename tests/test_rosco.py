@@ -116,3 +116,67 @@ def test_controllers_in_threads_take_turns_and_print_nothing(capfd):
     out, _ = capfd.readouterr()
     assert results[0] == solo and results[1] == solo
     assert out == "after\n"
+
+
+def _discon(tmp_path, key, value):
+    """A copy of the 5 MW DISCON.IN (and its Cp table) with ``key`` set to ``value``."""
+    from gearmodal.turbine.rosco import rosco_files
+
+    deck = rosco_files()[1]
+    out = []
+    for line in (deck / "DISCON.IN").read_text().splitlines():
+        v, bang, comment = line.partition("!")
+        if bang and comment.strip().split()[0] == key:
+            line = f"{value}    !{comment}"
+        out.append(line)
+    (tmp_path / "DISCON.IN").write_text("\n".join(out) + "\n")
+    table = deck / "Cp_Ct_Cq.NREL5MW.txt"
+    (tmp_path / table.name).write_text(table.read_text())
+    return tmp_path / "DISCON.IN"
+
+
+@pytest.mark.parametrize("key, value, match", [
+    ("VS_Rgn2K", "NaN", r"DISCON\.IN:\d+ VS_Rgn2K = 'NaN': must be a finite number"),
+    ("VS_RtTq", "nan", r"VS_RtTq = 'nan': must be a finite number"),
+    ("VS_RtTq", "lots", r"VS_RtTq = 'lots': not a number"),
+    ("PerfFileName", '"missing.txt"', r"PerfFileName.*no such file"),
+])
+def test_a_bad_discon_value_is_named_before_the_controller_reads_it(tmp_path, key, value,
+                                                                     match):
+    """The compiled controller takes NaN as a gain (wrong torque) and ends the process on a
+    missing table: the parameter file is checked first, naming the file, line and key."""
+    path = _discon(tmp_path, key, value)
+    with pytest.raises(gm.ModelError, match=match):
+        Rosco(path, dt=DT)
+    if key != "PerfFileName":
+        with pytest.raises(gm.ModelError, match=key):
+            discon_value(key, path)
+
+
+@pytest.mark.parametrize("kw, match", [({"efficiency": float("nan")}, "efficiency"),
+                                       ({"efficiency": 0.0}, "efficiency"),
+                                       ({"blades": 0}, "blades"),
+                                       ({"pitch0": float("inf")}, "pitch0")])
+def test_bad_controller_settings_are_named(kw, match):
+    with pytest.raises(gm.ModelError, match=match):
+        Rosco(dt=DT, **kw)
+
+
+def test_a_nan_measurement_is_refused_by_name():
+    with Rosco(dt=DT) as ctrl, pytest.raises(gm.ModelError, match="generator_speed = nan"):
+        ctrl.step(0.0, float("nan"), 1.0, 0.0, 1e4, 8.0)
+
+
+def test_a_dotted_tmpdir_keeps_the_debug_files_in_the_private_folder(tmp_path, monkeypatch):
+    """ROSCO cuts its output name at the first '.': under a TMPDIR such as ``mktemp -d``
+    makes, the private folder goes where the path has no dot, and nothing stays behind."""
+    import tempfile
+
+    dotted = tmp_path / "tmp.AbC12"
+    dotted.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(dotted))
+    with Rosco(dt=DT) as ctrl:
+        assert "." not in str(ctrl._dir)
+        _drive(ctrl, 10, 70.0, 0.0, 1e4, 7.0)
+    assert not list(tmp_path.glob("**/*.dbg*"))
+    assert not list(dotted.iterdir())

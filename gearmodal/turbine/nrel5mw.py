@@ -102,7 +102,11 @@ def read_deck(path=None) -> Deck:
     reader = InputReader_OpenFAST()
     reader.FAST_InputFile = "NREL-5MW.fst"
     reader.FAST_directory = str(path)
-    reader.execute()
+    try:
+        reader.execute()
+    except (IndexError, ValueError, KeyError, TypeError, OSError) as e:
+        raise ModelError("deck", f"= {str(path)!r}: openfast-io could not read the deck "
+                         f"({type(e).__name__}: {e}); a damaged or incomplete file") from None
     vt = reader.fst_vt
     ed, ad, sd = vt["ElastoDyn"], vt["AeroDyn"], vt["ServoDyn"]
     edb = vt["ElastoDynBlade"]
@@ -122,7 +126,7 @@ def read_deck(path=None) -> Deck:
         foils.append(Airfoil(alpha, np.asarray(tab["Cl"], dtype=float),
                              np.asarray(tab["Cd"], dtype=float),
                              name=Path(ad["AFNames"][i]).stem))
-    return Deck(tip_radius=float(ed["TipRad"]), hub_radius=float(ed["HubRad"]),
+    deck = Deck(tip_radius=float(ed["TipRad"]), hub_radius=float(ed["HubRad"]),
                 blades=int(ed["NumBl"]), precone=math.radians(float(ed["PreCone(1)"])),
                 shaft_tilt=math.radians(float(ed["ShftTilt"])),
                 hub_inertia=float(ed["HubIner"]), generator_inertia=float(ed["GenIner"]),
@@ -141,6 +145,32 @@ def read_deck(path=None) -> Deck:
                 airfoils=tuple(foils), path=path,
                 rotor_mass=float(ed["HubMass"]) + int(ed["NumBl"]) * m_blade,
                 overhang=-float(ed["OverHang"]))
+    _check_deck(deck)
+    return deck
+
+
+def _check_deck(d: Deck) -> None:
+    """Every number of the deck finite, and those that must be positive so (a clear error
+    naming the field, not a wrong run)."""
+    positive = ("tip_radius", "hub_inertia", "generator_inertia", "rotor_inertia", "gear_ratio",
+                "drivetrain_stiffness", "air_density", "hub_height", "rotor_mass")
+    for f in ("tip_radius", "hub_radius", "precone", "shaft_tilt", "hub_inertia",
+              "generator_inertia", "rotor_inertia", "gear_ratio", "drivetrain_stiffness",
+              "drivetrain_damping", "rated_rotor_speed", "generator_efficiency", "air_density",
+              "hub_height", "rotor_mass", "overhang"):
+        v = getattr(d, f)
+        if not math.isfinite(v) or (f in positive and v <= 0):
+            raise ModelError(f"deck.{f}", f"= {v!r}: must be a finite number"
+                             + (" > 0" if f in positive else ""))
+    if not 0 < d.generator_efficiency <= 1:
+        raise ModelError("deck.generator_efficiency", f"= {d.generator_efficiency!r}: "
+                         "ServoDyn's GenEff in (0, 100] %")
+    if d.blades < 1:
+        raise ModelError("deck.blades", f"= {d.blades!r}: ElastoDyn's NumBl, 1 or more")
+    for f in ("span", "chord", "twist"):
+        a = getattr(d, f)
+        if a.size == 0 or not np.all(np.isfinite(a)):
+            raise ModelError(f"deck.{f}", "AeroDyn's blade table needs finite values")
 
 
 def rotor(deck: Deck | None = None) -> Rotor:
@@ -236,6 +266,13 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
     rated torque above rated. Returns the means over the last ``average`` s: rotor speed
     (rpm), pitch (deg), electrical power (kW: generator torque times speed times the
     generator efficiency), tip-speed ratio, Cp (aerodynamic power over the wind's)."""
+    for name, v, lo in (("t_end", t_end, 0.0), ("dt", dt, 0.0), ("aero_dt", aero_dt, 0.0),
+                        ("average", average, 0.0), ("wind_speed", wind_speed, 0.0)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > lo):
+            raise ModelError(name, f"= {v!r}: must be a finite number > {lo:g}")
+    if t_end / dt > 1e8:
+        raise ModelError("t_end", f"= {t_end!r} s at dt = {dt!r} s: {t_end / dt:.3g} steps, "
+                         "more than 1e8")
     d = read_deck() if deck is None else deck
     rot = rotor(d)
     n, m_aero = round(t_end / dt), max(1, round(aero_dt / dt))

@@ -65,15 +65,83 @@ def rosco_files() -> tuple[Path, Path]:
     return lib, deck
 
 
+def read_discon(discon_in=None) -> dict[str, list[str]]:
+    """Every parameter of a ``DISCON.IN`` (default: the 5 MW one of the wheel), ``{name:
+    value tokens}``: a line ``VALUE [VALUE ...] ! NAME - comment``. Checked before the
+    compiled controller reads the file (it ends the process on what it cannot read): every
+    value is a quoted string or a finite number (a clear error naming the file, the key and
+    the value), and the files it names (``PerfFileName``) exist."""
+    path = Path(discon_in) if discon_in is not None else rosco_files()[1] / "DISCON.IN"
+    try:
+        text = path.read_text(errors="replace")
+    except OSError as e:
+        raise ModelError("discon_in", f"= {str(path)!r}: cannot read it ({e.strerror or e})") \
+            from None
+    out: dict[str, list[str]] = {}
+    for number, line in enumerate(text.splitlines(), 1):
+        value, bang, comment = line.partition("!")
+        name = comment.strip().split(" ")[0].split("\t")[0] if bang else ""
+        tokens = value.split()
+        if not name or not tokens or line.lstrip().startswith("!"):
+            continue
+        for tok in tokens:
+            if tok.startswith('"') or tok.startswith("'"):
+                continue
+            try:
+                x = float(tok.replace("D", "E").replace("d", "e"))
+            except ValueError:
+                raise ModelError(f"{path.name}:{number} {name}", f"= {tok!r}: not a number "
+                                 "(quote a text value)") from None
+            if not math.isfinite(x):
+                raise ModelError(f"{path.name}:{number} {name}", f"= {tok!r}: must be a "
+                                 "finite number")
+        out[name] = tokens
+    perf = out.get("PerfFileName")
+    if perf:
+        f = Path(perf[0].strip('"\''))
+        f = f if f.is_absolute() else path.parent / f
+        if not f.is_file():
+            raise ModelError(f"{path.name} PerfFileName", f"= {perf[0]}: no such file "
+                             f"({f}); the controller reads its Cp, Ct and Cq tables there")
+    return out
+
+
 def discon_value(name: str, discon_in=None) -> float:
     """The number a ``DISCON.IN`` gives for ``name`` (``"VS_RtTq"``; default file: the 5 MW
     one of the wheel): the first value on the line whose comment starts with it."""
     path = Path(discon_in) if discon_in is not None else rosco_files()[1] / "DISCON.IN"
-    for line in path.read_text().splitlines():
-        value, _, comment = line.partition("!")
-        if comment.strip().split(" ")[0].split("\t")[0] == name and value.split():
-            return float(value.split()[0])
-    raise ModelError("discon_in", f"{path.name} gives no {name}")
+    values = read_discon(path)
+    if name not in values:
+        raise ModelError("discon_in", f"{path.name} gives no {name}")
+    tok = values[name][0]
+    try:
+        return float(tok.replace("D", "E").replace("d", "e"))
+    except ValueError:
+        raise ModelError(f"{path.name} {name}", f"= {tok}: not a number") from None
+
+
+def _private_folder() -> Path:
+    """A new private folder for one controller, in a path without dots: ROSCO names its
+    debug files from the output name cut at its first ``.``, so under a ``TMPDIR`` such as
+    ``mktemp -d`` makes (``/tmp/tmp.AbC``) they would land outside the folder. Tried in
+    order: ``TMPDIR`` (the system's temporary folder), ``/tmp``, ``/dev/shm``, the working
+    folder."""
+    tried = []
+    for base in (tempfile.gettempdir(), "/tmp", "/dev/shm", os.getcwd()):
+        if "." in base or base in tried:
+            tried.append(base)
+            continue
+        tried.append(base)
+        try:
+            d = Path(tempfile.mkdtemp(prefix="gearmodal-rosco-", dir=base))
+        except OSError:
+            continue
+        if "." not in str(d):
+            return d
+        shutil.rmtree(d, ignore_errors=True)
+    raise ModelError("TMPDIR", f"= {tempfile.gettempdir()!r}: ROSCO needs a writable "
+                     "temporary folder whose path has no '.' (it cuts its debug files' names "
+                     "at the first one); tried " + ", ".join(tried))
 
 
 class Rosco:
@@ -98,10 +166,19 @@ class Rosco:
             raise ModelError("discon_in", f"= {str(self.discon_in)!r}: no such file")
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
             raise ModelError("dt", f"= {dt!r}: must be a finite number > 0 s")
+        if isinstance(blades, bool) or not isinstance(blades, (int, np.integer)) or \
+                not 1 <= blades <= 10:
+            raise ModelError("blades", f"= {blades!r}: an integer from 1 to 10")
+        if not (isinstance(efficiency, (int, float)) and 0 < efficiency <= 1):
+            raise ModelError("efficiency", f"= {efficiency!r}: the generator's, a number in "
+                             "(0, 1]")
+        if not (isinstance(pitch0, (int, float)) and math.isfinite(pitch0)):
+            raise ModelError("pitch0", f"= {pitch0!r}: a finite angle in rad")
+        read_discon(self.discon_in)  # the controller ends the process on what it cannot read
         self.dt = float(dt)
         self.efficiency = float(efficiency)
         self._lib = None
-        self._dir = Path(tempfile.mkdtemp(prefix="gearmodal-rosco-"))
+        self._dir = _private_folder()
         try:
             (self._dir / "rosco.libs").symlink_to(lib.parent.parent.parent / "rosco.libs")
             copy = self._dir / "lib" / "discon" / "libdiscon.so"
@@ -149,6 +226,12 @@ class Rosco:
         and collective blade pitch (rad)."""
         if self._lib is None:
             raise ModelError("rosco", "the controller was closed")
+        for name, v in (("t", t), ("generator_speed", generator_speed),
+                        ("rotor_speed", rotor_speed), ("pitch", pitch),
+                        ("generator_torque", generator_torque), ("wind_speed", wind_speed)):
+            if not math.isfinite(v):
+                raise ModelError(f"rosco.step {name}", f"= {v!r}: must be a finite number "
+                                 "(a diverged turbine run feeds the controller this)")
         s = self.swap
         s[0] = 1.0 if self.started else 0.0
         s[1] = t

@@ -413,3 +413,18 @@ def test_a_bad_yaw_bearing_is_named(deck, kw, match):
 
     with pytest.raises(gm.ModelError, match=match):
         elastic_turbine(deck.path, **kw)
+
+
+def test_the_parked_turbine_rings_at_its_tower_mode_in_time():
+    """The exact method on the parked turbine released from a fore-aft tower deflection: the
+    top's coordinate oscillates at the first fore-aft mode's frequency (zero crossings over
+    five periods, interpolated: 0.5 %)."""
+    et = nrel5mw.flexible(yaw=False)
+    r = gm.simulate(et, 16.0, dt=0.005, q0={"turbine.tower_fa1": 0.1})
+    q = r.q["turbine.tower_fa1"].to_numpy()
+    t = r.q.index.to_numpy()
+    k = np.flatnonzero(np.diff(np.sign(q)) != 0)
+    zc = t[k] - q[k] * (t[k + 1] - t[k]) / (q[k + 1] - q[k])
+    f = 1.0 / (2.0 * np.mean(np.diff(zc)))
+    want = families(gm.modal(et))["tower FA1"]
+    assert f == pytest.approx(want, rel=5e-3)
