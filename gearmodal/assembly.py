@@ -3,7 +3,7 @@ matrices, contact gap functions as linear maps of the state, and load maps.
 
 The equations of motion at input speed ``Omega`` (rad/s) in contact state ``s`` are (DESIGN 2.1)::
 
-    M q'' + (C + C_s + Omega G) q' + (K + K_s + Omega^2 K_cent) q
+    M q'' + (C + C_s + Omega G) q' + (K + K_s + Omega K_speed + Omega^2 K_cent) q
         = B u + f_s + Omega^2 f_cent
 
 Every contact (a flank of a mesh, one side of a bearing dead band) ``e`` has a penetration

@@ -26,7 +26,7 @@ from .model.components import Gear
 from .model.model import Model
 from .model.validate import plausible
 from .modetypes import LOOSE, QUIET, classify, turbine_groups
-from .result_io import read_header, write_header
+from .result_io import read_header, refuses_damage, write_header
 from .whirl import damping_ratios, log_decrement, rigid_undamped, translation_pairs, whirl
 
 #: layout version of :meth:`CampbellResult.save` (``result.json``)
@@ -403,6 +403,7 @@ class CampbellResult:
         return d
 
     @classmethod
+    @refuses_damage
     def load(cls, directory) -> CampbellResult:
         """The result :meth:`save` wrote to ``directory``, numbers exact (veerings as lists)."""
         d = Path(directory)
@@ -570,7 +571,7 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
     base = model.merged if isinstance(model, Coupled) else model
     own = getattr(model, "excitation_orders", None)  # a system that knows its own orders
     if orders is not None:
-        order_map = dict(orders)
+        order_map = _orders(orders)
     else:
         order_map = own() if callable(own) else default_orders(base)
     geometry = geometry_table(base)
@@ -590,6 +591,26 @@ def campbell(model, speeds_rpm, orders: dict | None = None, loads=None, *, state
                           extra={"veerings": [(s[i], a, b, fr, gap, m)
                                               for i, a, b, fr, gap, m in found],
                                  "states": np.array(states)})
+
+
+def _orders(orders) -> dict[str, float]:
+    """``orders`` as ``{name: order per revolution}``, each a finite number > 0."""
+    try:
+        items = dict(orders).items()
+    except (TypeError, ValueError):
+        raise ModelError("orders", f"= {orders!r}: a mapping {{name: order per revolution}}, "
+                         "e.g. {'3P': 3.0}") from None
+    out = {}
+    for k, v in items:
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            raise ModelError(f"orders.{k}", f"= {v!r}: an order per revolution (a number)") \
+                from None
+        if not math.isfinite(x) or x <= 0:
+            raise ModelError(f"orders.{k}", f"= {v!r}: must be a finite number > 0")
+        out[str(k)] = x
+    return out
 
 
 def _sweep_solver(M, C, K, G, Kc, Kv=None):

@@ -363,6 +363,12 @@ def cmd_fmu(args) -> int:
     from .fmu import export_fmu
 
     drive = None
+    if not args.drive and (args.drive_stiffness is not None or args.drive_damping):
+        raise ModelError("--drive-stiffness", "and --drive-damping set the drive's spring: "
+                         "they need --drive DOF (the rotation the host's shaft drives)")
+    if args.rebase_dt is not None and args.reference != "follow":
+        raise ModelError("--rebase-dt", f"= {args.rebase_dt!r}: re-basing is for "
+                         "--reference follow (the reference is fixed here)")
     if args.drive:
         if args.drive_stiffness is None:
             raise ModelError("--drive-stiffness", "is needed with --drive (N m/rad)")

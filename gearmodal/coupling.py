@@ -151,6 +151,8 @@ class LinearSystem(System):
         self._L = L
 
     def residual(self, t, q, v, a, u=None):
+        """``B`` at rest (the speed terms enter through the coupled assembly, scaled by the
+        input speed there)."""
         return self.M @ a + self.C @ v + self.K @ q - self._L @ self._u(u)
 
     def tangents(self, q=None, v=None, t=0.0):

@@ -1,9 +1,10 @@
 """Modal analysis of a model at one input speed (DESIGN 3.1).
 
 Undamped and non-rotating: the generalised symmetric eigenproblem ``K phi = w^2 M phi``.
-Otherwise the first-order (state-space) form of ``M q'' + (C + Omega G) q' + (K + Omega^2 K_cent) q
-= 0``. The contact state is the nominal one (front flanks engaged, bearing clearances taken up)
-unless a state is given.
+Otherwise the first-order (state-space) form of
+``M q'' + (C + Omega G) q' + (K + Omega K_speed + Omega^2 K_cent) q = 0``. The contact
+state is the nominal one (front flanks engaged, bearing clearances taken up) unless a state is
+given.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from .assembly import Assembly, as_assembly, reduction
 from .errors import ModelError
 from .frames import centre
 from .model.validate import plausible
-from .result_io import read_csv, read_header, write_header
+from .result_io import read_csv, read_header, refuses_damage, write_header
 from .whirl import damping_ratios, log_decrement, rigid_undamped, translation_pairs, whirl
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
@@ -335,6 +336,7 @@ class ModalResult:
         return d
 
     @classmethod
+    @refuses_damage
     def load(cls, directory) -> ModalResult:
         """The result :meth:`save` wrote to ``directory``, numbers exact. The static
         ``equilibrium`` is not saved: it is ``None`` (its contact state is kept)."""

@@ -15,6 +15,7 @@ table read a decimated view (:func:`decimated`) that keeps every bucket's extrem
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -27,7 +28,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import ModelError
+from .errors import GearmodalError, ModelError
 
 __all__ = ["FORMATS", "VIEW_ROWS", "TableWriter", "decimated", "read_csv", "read_header",
            "read_table", "table_chunks", "table_path", "thin_frame", "write_header",
@@ -88,6 +89,25 @@ def verify_digests(directory, sums: dict[str, str]) -> None:
             raise ModelError("directory", f"= {str(d)!r}: {name} was damaged or changed "
                              "after it was saved (its SHA-256 differs from the saved one): "
                              "restore it or run again")
+
+
+def refuses_damage(load):
+    """For a result's ``load(cls, directory)``: a saved file edited or damaged so that reading
+    it fails (a field of the wrong type in ``result.json``) is a :class:`ModelError` naming
+    the directory, not the TypeError or AttributeError of whatever tripped on it."""
+
+    @functools.wraps(load)
+    def wrapper(cls, directory, *args, **kwargs):
+        try:
+            return load(cls, directory, *args, **kwargs)
+        except GearmodalError:
+            raise
+        except (TypeError, AttributeError, ValueError, KeyError, IndexError,
+                OverflowError) as e:
+            raise ModelError("directory", f"= {str(directory)!r}: its saved result is damaged "
+                             f"({type(e).__name__}: {e}); save it again") from None
+
+    return wrapper
 
 
 @contextmanager

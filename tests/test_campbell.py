@@ -93,3 +93,12 @@ def test_loaded_campbell_uses_the_equilibrium_contact_state():
     nominal = campbell(pair, [0.0, 100.0, 200.0], orders={"1P": 1.0})
     np.testing.assert_allclose(camp.frequencies_hz[:, 1], nominal.frequencies_hz[:, 1],
                                rtol=1e-12)
+
+
+@pytest.mark.parametrize("orders, match", [({"x": "a"}, r"orders\.x = 'a': an order"),
+                                           ({"x": -1.0}, r"orders\.x = -1\.0: must be"),
+                                           ([1, 2], r"orders = \[1, 2\]: a mapping")])
+def test_bad_orders_are_named(orders, match):
+    m = gm.load("studies/models/gear_pair.toml")
+    with pytest.raises(gm.ModelError, match=match):
+        gm.campbell(m, [0.0, 100.0], orders=orders)

@@ -161,6 +161,8 @@ def test_result_dir_parameter(tmp_path):
     (["--out", "x.fmu", "--input", "nope"], "inputs.nope"),
     (["--out", "x.fmu", "--output", "nope"], "outputs.nope"),
     (["--out", "x.fmu", "--drive", "pinion.theta"], "--drive-stiffness"),
+    (["--out", "x.fmu", "--drive-stiffness", "2e3"], "need --drive DOF"),
+    (["--out", "x.fmu", "--rebase-dt", "0.01"], "--rebase-dt"),
 ])
 def test_bad_arguments(tmp_path, capsys, monkeypatch, args, match):
     model = os.path.abspath("studies/models/gear_pair.toml")

@@ -142,3 +142,31 @@ def test_the_fidelity_ladder_returns_the_stored_rung_without_running_it(tmp_path
     assert again.table.cached.all() and again.rung == first.rung
     _same_frame(again.result.forces, first.result.forces)
     _same_frame(again.result.events, first.result.events)
+
+
+@pytest.mark.parametrize("kind, key, value", [
+    ("modal", "dof_names", 5), ("modal", "mode_types", None), ("campbell", "extra", "x"),
+    ("campbell", "orders", [1]), ("campbell", "speed_range_rpm", 1.5),
+    ("simulation", "initial_state", 5), ("simulation", "span", True),
+    ("simulation", "sha256", [1])])
+def test_a_result_json_edited_to_a_wrong_type_is_named(tmp_path, kind, key, value):
+    """A saved result whose result.json field was edited to another type: a ModelError naming
+    the directory (issue 62), not the TypeError or AttributeError it trips."""
+    import json
+
+    from gearmodal.campbell import CampbellResult
+    from gearmodal.integrate.result import SimulationResult
+    from gearmodal.modal import ModalResult
+
+    m = gm.load("studies/models/gear_pair.toml")
+    d = tmp_path / kind
+    res = {"modal": lambda: gm.modal(m), "campbell": lambda: gm.campbell(m, [0.0, 100.0]),
+           "simulation": lambda: gm.simulate(m, 1e-3, dt=1e-4)}[kind]()
+    res.save(d)
+    head = json.loads((d / "result.json").read_text())
+    head[key] = value
+    (d / "result.json").write_text(json.dumps(head))
+    load = {"modal": ModalResult, "campbell": CampbellResult,
+            "simulation": SimulationResult}[kind].load
+    with pytest.raises(gm.ModelError, match=r"directory = .*damaged"):
+        load(d)

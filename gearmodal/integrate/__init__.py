@@ -155,10 +155,10 @@ def simulate(model, t_end: float, *, dt: float, loads: dict | None = None,
     [['mesh', 'front', 'closed'], ['mesh', 'front', 'open']]
     """
     get_method(method, options)  # the name and its options checked
+    n_steps = _output_steps(t_end, dt, speed_rpm, load_dt)
     check = getattr(model, "check_simulation", None)
     if callable(check):  # a model that is not simulated at every speed says so
         check(speed_rpm)
-    n_steps = _output_steps(t_end, dt, speed_rpm, load_dt)
     omega = float(speed_rpm) * 2 * math.pi / 60  # the input azimuth is omega t
     asm, name, casm, geo = _assembly_of(model, omega, speed_rpm)
     nc = len(asm.contacts.element) if asm.contacts is not None else 0

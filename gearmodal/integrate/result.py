@@ -21,6 +21,7 @@ from ..result_io import (
     parquet_parts,
     read_header,
     read_table,
+    refuses_damage,
     remove_table,
     replacing,
     table_chunks,
@@ -734,6 +735,7 @@ class SimulationResult:
                      sha256=digests(d, [*names, "settings.json"]))
 
     @classmethod
+    @refuses_damage
     def load(cls, directory) -> SimulationResult:
         """The result :meth:`save` wrote to ``directory`` (Parquet or CSV): every table and
         number as it was (floats exact), the tables read when first asked for; ``settings``

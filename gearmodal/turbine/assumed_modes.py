@@ -21,7 +21,7 @@ Lagrangian's quadratic part gives (``m`` the point's mass; the total time deriva
 
 * ``M = sum m A^T A``                                                        (L1)
 * ``G = 2 sum m A^T A'``                  (Coriolis and gyroscopic; skew)    (L2)
-* ``K = sum m A^T A'' + sum m r_0'' . B``  (spin softening and the
+* ``K_cent = sum m A^T A'' + sum m r_0'' . B`` (per (rad/s)^2: spin softening and the
   steady rotation's geometric stiffness: the blades' centrifugal tension and the
   turning rotor's second-order motion with the tower top, which cancel the softening of
   a rigid rotation exactly)                                                   (L3)
@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ModelError
-from .bodies import BeamModes
+from .bodies import BeamModes, tail_integral
 from .elastodyn import GRAVITY, StructureDeck
 
 GENERATOR = ("locked", "free")
@@ -152,8 +152,8 @@ class _Frame:
             m_blade = float(np.sum(blade.weights * blade.mass))
             m_rna = deck.nacelle_mass + deck.hub_mass + deck.blades * m_blade
             if m_rna > 0:
-                seg = np.concatenate([[0.0], np.cumsum(tower.weights * tower.mass)])
-                tension = -gravity * (m_rna + seg[-1] - seg[1:])  # compression: negative
+                above = tail_integral(tower, tower.mass)  # the tower's weight above each section
+                tension = -gravity * (m_rna + above)  # compression: negative
                 self.K[tw, tw] += tower.slope_matrix(tension)
                 h = (deck.nacelle_mass * rN[2]
                      + (deck.hub_mass + deck.blades * m_blade) * apex[2]) / m_rna
@@ -242,8 +242,7 @@ def turning_matrices(deck: StructureDeck, blade: BeamModes, tower: BeamModes, *,
     cols = np.array([[f.ix[f"{m}_{c}"] for c in MBC] for m in blade.names])  # (modes, 3)
     K_b, C_b = blade.stiffness, blade.damping_matrix()
     # the centrifugal tension per (rad/s)^2: N(s) = cos(cone)^2 int_s^L m (r_h + s') ds'
-    seg = np.concatenate([[0.0], np.cumsum(f.wm * f.radius)])
-    tension = math.cos(f.cone) ** 2 * (seg[-1] - seg[1:])
+    tension = math.cos(f.cone) ** 2 * tail_integral(blade, blade.mass * f.radius)
     K_tension = blade.slope_matrix(tension)
     j = np.arange(_SAMPLES)
     phase = 2.0 * math.pi * j / _SAMPLES

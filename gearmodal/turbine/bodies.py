@@ -38,8 +38,9 @@ from ..errors import ModelError
 from .elastodyn import StructureDeck, read_blade_file, read_tower_file
 
 SHAPES = ("computed", "elastodyn")
-#: Gauss-Legendre points per interval between the shapes' nodes and the property stations
-#: (the integrands are polynomials of degree <= 7 there: exact)
+#: Gauss-Legendre points per interval between the shapes' nodes and the property stations:
+#: exact for the mass integrals (cubic shapes squared times a linear mass: degree 7), a
+#: quadrature for the polynomial shapes' stiffness (degree up to 9 with a linear stiffness)
 _GAUSS = 4
 
 
@@ -113,6 +114,38 @@ def _grid(breaks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             np.concatenate([[0.0], wx, [0.0]]))
 
 
+def _damping(deck: list[float], n: int) -> list[float]:
+    """The deck's damping ratios of a family's first ``n`` modes; modes beyond those the deck
+    gives (it has two flapwise, one edgewise, two per tower direction) take its last one."""
+    if n == 0:
+        return []
+    if not deck:
+        return [0.0] * n
+    return (deck + [deck[-1]] * n)[:n]
+
+
+def tail_integral(modes: BeamModes, values: np.ndarray) -> np.ndarray:
+    """``int_x^L g ds`` at every quadrature point ``x`` of ``modes`` for ``g`` given there as
+    ``values``, exact when ``g`` is a polynomial of degree <= 3 on each interval of the grid
+    (the mass per length times a linear function: the centrifugal tension, the weight above a
+    section): on each interval the cubic through its four Gauss points, integrated (Lagrange
+    weights on the reference interval)."""
+    g = np.asarray(values, dtype=float)
+    vals = g[1:-1].reshape(-1, _GAUSS)
+    half = 0.5 * modes.weights[1:-1].reshape(-1, _GAUSS).sum(axis=1)  # (b - a) / 2
+    nodes, weights = np.polynomial.legendre.leggauss(_GAUSS)
+    coef = np.linalg.inv(np.vander(nodes, _GAUSS, increasing=True))  # Lagrange basis
+    k = np.arange(1, _GAUSS + 1)
+    # W[i, j] = int_{xi_i}^{1} l_j(xi) d xi
+    W = ((1.0 - nodes[:, None] ** k[None, :]) / k[None, :]) @ coef
+    full = half * (vals @ weights)
+    after = np.concatenate([np.cumsum(full[::-1])[::-1][1:], [0.0]])  # the intervals beyond
+    out = np.empty_like(g)
+    out[1:-1] = ((vals @ W.T) * half[:, None] + after[:, None]).ravel()
+    out[0], out[-1] = float(full.sum()), 0.0
+    return out
+
+
 def _counts(what: str, first: tuple[str, int], second: tuple[str, int],
             shapes: str) -> tuple[int, int]:
     """The two mode counts, each an integer from 0 to 6 and not both 0, and ``shapes``."""
@@ -159,7 +192,7 @@ def _parked_copy(deck: StructureDeck, folder: Path) -> Path:
 
 def _select(result, n_first: int, n_second: int, what: str):
     """The first ``n_first`` modes dominated by the first direction (flap or fore-aft) and
-    ``n_second`` by the second (edge or side-to-side); torsion-dominated modes are skipped."""
+    ``n_second`` by the second (edge or side-to-side), each by its larger displacement."""
     first, second = [], []
     for i, s in enumerate(result.shapes):
         a = float(np.max(np.abs(s.flap_disp)))
@@ -220,8 +253,8 @@ def blade_modes(deck: StructureDeck, flap: int = 2, edge: int = 1,
     L = deck.blade_length
     frac = np.asarray(bf.bl_fract, dtype=float)
     mass_tab = np.asarray(bf.b_mass_den, dtype=float) * float(bf.adj_bl_ms)
-    zeta = ([float(v) / 100 for v in bf.bld_fl_dmp][:flap] + [float(bf.bld_ed_dmp[0]) / 100]
-            * edge)
+    zeta = _damping([float(v) / 100 for v in bf.bld_fl_dmp], flap) + \
+        _damping([float(v) / 100 for v in bf.bld_ed_dmp], edge)
     if shapes == "elastodyn":
         if flap > 2 or edge > 1:
             raise ModelError("blade_modes", "the deck's polynomials give two flapwise and one "
@@ -257,8 +290,8 @@ def tower_modes(deck: StructureDeck, fore_aft: int = 2, side_to_side: int = 2,
     H = deck.tower_length
     frac = np.asarray(tf.ht_fract, dtype=float)
     mass_tab = np.asarray(tf.t_mass_den, dtype=float) * float(tf.adj_tw_ma)
-    zeta = ([float(v) / 100 for v in tf.twr_fa_dmp][:fore_aft]
-            + [float(v) / 100 for v in tf.twr_ss_dmp][:side_to_side])
+    zeta = _damping([float(v) / 100 for v in tf.twr_fa_dmp], fore_aft) + \
+        _damping([float(v) / 100 for v in tf.twr_ss_dmp], side_to_side)
     names = tuple([f"fa{i + 1}" for i in range(fore_aft)] + [f"ss{i + 1}"
                                                              for i in range(side_to_side)])
     if shapes == "elastodyn":

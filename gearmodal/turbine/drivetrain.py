@@ -78,6 +78,7 @@ from ..result_io import (
     HEADER,
     digests,
     read_header,
+    refuses_damage,
     replacing,
     verify_digests,
     write_header,
@@ -164,6 +165,7 @@ class DrivetrainResult:
                                         "stats.json"]))
 
     @classmethod
+    @refuses_damage
     def load(cls, directory) -> DrivetrainResult:
         """The run :meth:`save` wrote to ``directory``: turbine loads and the gearbox result,
         floats exact; an older layout is refused naming the directory."""

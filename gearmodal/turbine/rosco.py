@@ -229,7 +229,11 @@ class Rosco:
         for name, v in (("t", t), ("generator_speed", generator_speed),
                         ("rotor_speed", rotor_speed), ("pitch", pitch),
                         ("generator_torque", generator_torque), ("wind_speed", wind_speed)):
-            if not math.isfinite(v):
+            try:
+                ok = math.isfinite(v)
+            except TypeError:
+                ok = False
+            if not ok:
                 raise ModelError(f"rosco.step {name}", f"= {v!r}: must be a finite number "
                                  "(a diverged turbine run feeds the controller this)")
         s = self.swap

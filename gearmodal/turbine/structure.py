@@ -42,7 +42,10 @@ class ElasticTurbine(Coupled):
 
     Its ``deck`` is the :class:`~gearmodal.turbine.elastodyn.StructureDeck`, ``blade`` and
     ``tower`` their :class:`~gearmodal.turbine.bodies.BeamModes`, ``generator`` ``"locked"`` or
-    ``"free"``, ``gearbox`` the gearbox model or None.
+    ``"free"``, ``gearbox`` the gearbox model or None. ``geometric_stiffness=False`` in
+    :func:`gearmodal.modal` and :func:`gearmodal.campbell` is Lin & Parker's option for the
+    gearbox's planets; the turbine's own terms of the steady rotation (the blades' centrifugal
+    tension, the turning rotor's second-order motion) are always in.
     """
 
     def __init__(self, deck: StructureDeck, blade: BeamModes, tower: BeamModes, *,
@@ -50,14 +53,14 @@ class ElasticTurbine(Coupled):
                  gravity: float = GRAVITY, name: str = "elastic turbine",
                  speed_range_rpm: tuple[float, float] | None = None,
                  yaw_stiffness: float | None = None, yaw_damping: float = 0.0):
-        g = float(gravity)
+        g = _number("gravity", gravity)
         if not math.isfinite(g) or g < 0:
             raise ModelError("gravity", f"= {gravity!r}: must be a finite number >= 0 m/s^2")
         if generator not in GENERATOR:
             raise ModelError("generator", f"= {generator!r}: one of {', '.join(GENERATOR)}")
         yaw = None
         if yaw_stiffness is not None:
-            k, c = float(yaw_stiffness), float(yaw_damping)
+            k, c = _number("yaw_stiffness", yaw_stiffness), _number("yaw_damping", yaw_damping)
             if not math.isfinite(k) or k <= 0:
                 raise ModelError("yaw_stiffness", f"= {yaw_stiffness!r}: a finite stiffness "
                                  "> 0 N m/rad (None: the nacelle held in yaw)")
@@ -77,6 +80,12 @@ class ElasticTurbine(Coupled):
             raise ModelError("gearbox", f"expected a gm.Model of a drivetrain or None, got "
                              f"{type(gearbox).__name__}")
         rotor = _body_with_role(gearbox, "rotor")
+        moving = [d for d in gearbox.dof_names if d.startswith(f"{rotor}.") and
+                  d != f"{rotor}.theta"]
+        if moving:
+            raise ModelError(f"gearbox.{rotor}.dofs", f"the turbine's hub and blades carry the "
+                             f"rotor: its body in the gearbox model must only turn "
+                             f"(dofs = 'torsional'), it has {', '.join(moving)}")
         gen = _body_with_role(gearbox, "generator")
         mat = turning_matrices(deck, blade, tower, generator=None, gravity=g, yaw=yaw)
         j = mat.dof_names.index("rotor_azimuth")
@@ -131,6 +140,13 @@ class ElasticTurbine(Coupled):
 def _system(mat) -> LinearSystem:
     return LinearSystem("turbine", mat.dof_names, mat.M, mat.K, mat.C, G=mat.G,
                         K_cent=mat.K_cent, K_speed=mat.K_speed)
+
+
+def _number(name: str, value) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ModelError(name, f"= {value!r}: a number") from None
 
 
 def _body_with_role(model: Model, role: str) -> str:
