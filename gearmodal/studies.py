@@ -387,7 +387,9 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
     try:
         saves = {cid: (str(root / f".res-{cid}-{uuid.uuid4().hex[:8]}") if keep_results
                        else None) for cid, _ in todo}
-        futures = {executor.submit(_run_case, scene, c, metrics, blas_threads, saves[cid]):
+        # a scene file by its absolute path: workers may run in another folder (a cluster's)
+        job = scene if callable(scene) else str(Path(scene).resolve())
+        futures = {executor.submit(_run_case, job, c, metrics, blas_threads, saves[cid]):
                    (cid, c) for cid, c in todo}
         for fut in cf.as_completed(futures):
             cid, c = futures[fut]

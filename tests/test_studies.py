@@ -365,3 +365,33 @@ def test_a_failing_case_raises_after_the_running_ones_are_stored(tmp_path):
     res = gm.sweep(_sleepy_case, {"t": [0.3, 0.2]}, executor=ThreadPoolExecutor(2),
                    store=tmp_path, metrics=dict, progress=False)
     assert res.cached.tolist() == [True, False]  # 0.3 was kept, 0.2 is new
+
+
+class _ElsewhereExecutor(ThreadPoolExecutor):
+    """A one-thread executor whose cases run in another working folder, as a cluster's
+    workers started elsewhere do (issue 58)."""
+
+    def __init__(self, folder):
+        super().__init__(1)
+        self.folder = folder
+
+    def submit(self, fn, /, *args, **kwargs):
+        def elsewhere():
+            here = os.getcwd()
+            os.chdir(self.folder)
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                os.chdir(here)
+
+        return super().submit(elsewhere)
+
+
+def test_a_relative_scene_path_runs_on_workers_in_another_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(ROOT)
+    rel = os.path.relpath(STAGE, ROOT)
+    elsewhere = tmp_path / "worker"
+    elsewhere.mkdir()
+    res = gm.sweep(rel, {"scene.t_end": [0.005]}, executor=_ElsewhereExecutor(elsewhere),
+                   progress=False)
+    assert res.loc[0, "n_events"] >= 0 and not isinstance(res.get("error", [None])[0], str)
