@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import ModelError, StoreError
+from .errors import ModelError, SolveError, StoreError
 from .result_io import sha256_of
 from .store import Store
 from .summary import summarize
@@ -409,6 +409,11 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
                                 r, t, cpu_f = f.result()
                                 _write_case(disk, fid, fc, {**r, "cpu_s": cpu_f}, t,
                                             _saved(saves[fid]))
+                    if isinstance(err, cf.process.BrokenProcessPool):
+                        raise SolveError("sweep", f"a worker process died (killed, or out of "
+                                         f"memory) while running case {cid}; the finished "
+                                         "cases are stored: run the sweep again to resume "
+                                         "(or give errors='record')") from err
                     raise
                 rows[cid] = {"error": f"{type(err).__name__}: {err}", "cached": False}
                 if saves[cid] is not None:

@@ -395,3 +395,21 @@ def test_a_relative_scene_path_runs_on_workers_in_another_folder(tmp_path, monke
     res = gm.sweep(rel, {"scene.t_end": [0.005]}, executor=_ElsewhereExecutor(elsewhere),
                    progress=False)
     assert res.loc[0, "n_events"] >= 0 and not isinstance(res.get("error", [None])[0], str)
+
+
+def _dies_on_one(x):
+    if x == 1:
+        os._exit(3)  # the worker process dies, as when it is killed
+    return x
+
+
+def _as_row(r):
+    return {"value": float(r)}
+
+
+def test_a_worker_that_dies_is_named_and_the_rest_is_kept(tmp_path):
+    """Issue 62: a pool worker killed mid-sweep gave an internal BrokenProcessPool error; it is
+    a SolveError saying what happened and that a rerun resumes."""
+    with pytest.raises(gm.SolveError, match=r"worker process died.*run the sweep again"):
+        gm.sweep(_dies_on_one, [{"x": 0}, {"x": 1}], metrics=_as_row, max_workers=1,
+                 store=tmp_path, progress=False)
