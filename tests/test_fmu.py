@@ -37,7 +37,7 @@ _RUN = """
 import os, sys, numpy as np, fmpy
 fmu, out, stop, inp, starts = sys.argv[1:6]
 kw = dict(stop_time=float(stop), output_interval=float(sys.argv[6]),
-          start_values=eval(starts))
+          start_values=eval(starts), start_time=float(sys.argv[7]))
 if inp != "-":
     kw["input"] = np.load(inp)
 np.save(out, fmpy.simulate_fmu(fmu, **kw))
@@ -46,7 +46,7 @@ os._exit(0)
 """
 
 
-def simulate(fmu, stop_time, signal=None, start_values=None, interval=H):
+def simulate(fmu, stop_time, signal=None, start_values=None, interval=H, start_time=0.0):
     """``fmpy.simulate_fmu`` of ``fmu`` in a fresh process (:data:`_RUN`): its result."""
     d = os.path.dirname(str(fmu))
     inp = "-"
@@ -55,7 +55,7 @@ def simulate(fmu, stop_time, signal=None, start_values=None, interval=H):
         np.save(inp, signal)
     out = os.path.join(d, "output.npy")
     r = subprocess.run([sys.executable, "-c", _RUN, str(fmu), out, repr(stop_time), inp,
-                        repr(start_values or {}), repr(interval)],
+                        repr(start_values or {}), repr(interval), repr(start_time)],
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     return np.load(out)
@@ -191,3 +191,137 @@ def test_stage_driven_through_its_shaft_follows(tmp_path):
         dt=1e-4, drive=gm.Drive("carrier.theta", 5e7, 2e4), reference="follow"))
     assert "drive.torque" in outs
     assert err.max() <= 1e-9, dict(zip(outs, err, strict=True))
+
+
+#: FMI calls on one instance in a fresh process (fmpy's low-level FMU2Slave, as a host calls
+#: them; :data:`_RUN`'s reason), each printed with its status; fmpy's default logger prints
+#: what the FMU logs as "[ERROR] message"
+_CALLS = """
+import os, sys, fmpy
+from fmpy.fmi2 import FMU2Slave
+fmu, script = sys.argv[1:3]
+md = fmpy.read_model_description(fmu)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+s = FMU2Slave(guid=md.guid, unzipDirectory=fmpy.extract(fmu), instanceName="gearbox",
+              modelIdentifier=md.coSimulation.modelIdentifier)
+def call(name, *args):
+    try:
+        out = getattr(s, name)(*args)
+        print("OK", name, out, flush=True)
+    except Exception as e:
+        print("STATUS", name, getattr(e, "status", type(e).__name__), flush=True)
+try:
+    s.instantiate(loggingOn=True)
+except Exception as e:
+    print("INSTANTIATE", e, flush=True)
+    os._exit(0)
+def start():
+    call("setupExperiment", None, 0.0)
+    call("enterInitializationMode")
+    call("exitInitializationMode")
+exec(script)
+sys.stdout.flush()
+os._exit(0)
+"""
+
+
+def calls(fmu, script: str) -> list[str]:
+    """The lines printed by :data:`_CALLS` running ``script`` on an instance of ``fmu``."""
+    r = subprocess.run([sys.executable, "-c", _CALLS, str(fmu), script], capture_output=True,
+                       text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    return r.stdout.splitlines()
+
+
+@pytest.fixture(scope="module")
+def pair_fmu(tmp_path_factory):
+    """The gear pair's FMU with its default inputs (pinion and wheel torques)."""
+    fmu = tmp_path_factory.mktemp("fmu") / "pair.fmu"
+    assert main(["fmu", "studies/models/gear_pair.toml", "--out", str(fmu)]) == 0
+    return fmu
+
+
+def test_state_machine(pair_fmu):
+    """Issue 62: each call checked against the FMI 2.0 state it is allowed in; a refused
+    doStep is fmi2Discard (2) with gearmodal's message logged as an error, the instance then
+    in stepFailed; a step from another point than the FMU's time is refused."""
+    out = calls(pair_fmu, """
+call("doStep", 0.0, 1e-3)                   # before initialisation
+start()
+call("doStep", 0.0, 1e-3)
+call("doStep", 0.498, 1e-3)                 # the host's time is not the FMU's
+call("doStep", 0.001, 1e-3)                 # after a refused step
+call("getReal", [vr["pinion.theta"]])
+call("terminate")
+call("doStep", 0.001, 1e-3)                 # after fmi2Terminate
+""")
+    text = "\n".join(out)
+    assert out[0].startswith("[ERROR] gearmodal: fmi2DoStep refused in state instantiated")
+    assert out[1] == "STATUS doStep 2"
+    assert "OK doStep None" in out  # the step from 0
+    assert ("currentCommunicationPoint = 0.498 s, but the FMU is at 0.001 s" in text)
+    assert "fmi2DoStep refused in state stepFailed" in text
+    assert any(line.startswith("OK getReal") for line in out)
+    assert "OK terminate 0" in out
+    assert "fmi2DoStep refused in state terminated" in text
+    assert out.count("STATUS doStep 2") == 4
+
+
+def test_fixed_parameter_after_initialisation(pair_fmu):
+    """Setting the fixed parameter dt after initialisation is refused (pythonfmu 0.7 gives
+    fmi2Fatal, 4, to any refusal but doStep's), gearmodal's message logged first."""
+    out = calls(pair_fmu, 'start(); call("setReal", [vr["dt"]], [1e-3])')
+    assert ("[ERROR] gearmodal: fmi2SetReal refused in state stepComplete: dt is a "
+            "parameter fixed when initialisation ends") in "\n".join(out)
+    assert out[-1] == "STATUS setReal 4"
+
+
+@pytest.mark.parametrize("script, message", [
+    ('call("setupExperiment", None, 0.0); call("enterInitializationMode");'
+     'call("setReal", [vr["dt"]], [float("nan")])', "dt = nan: must be a finite number"),
+    ('start(); call("doStep", 0.0, 0.0)', "communicationStepSize = 0.0: must be positive"),
+    ('start(); call("doStep", 0.0, -1e-3)', "communicationStepSize = -0.001: must be positive"),
+    ('start(); call("doStep", 0.0, 1.5e-4)', "by a whole number of output steps dt = 0.0001"),
+    ('start(); call("doStep", 0.0, 1e9)', "advance in shorter calls"),
+    ('start(); call("setReal", [vr["pinion.torque"]], [float("nan")]);'
+     'call("doStep", 0.0, 1e-3)', "loads.pinion.torque = nan: must be a finite number"),
+    ('call("setupExperiment", None, 0.0); call("enterInitializationMode");'
+     'call("setString", [vr["result_dir"]], [os.path.join(os.path.abspath(fmu), "res")]);'
+     'call("exitInitializationMode")', "cannot write the result there"),
+])
+def test_refusals_logged(pair_fmu, script, message):
+    """Bad parameters, steps and inputs: refused with a non-OK status, the reason logged
+    through the FMI logger as an error (the result folder asked under a file, the FMU)."""
+    out = calls(pair_fmu, script)
+    errors = [line for line in out if line.startswith("[ERROR] gearmodal:")]
+    assert errors and message in errors[-1], out
+    assert out[-1].startswith("STATUS") and out[-1].split()[-1] in ("2", "4")
+
+
+def test_damaged_configuration(pair_fmu, tmp_path):
+    """A damaged gearmodal_fmu.json inside the FMU: instantiation fails (fmi2Instantiate
+    returns NULL) with gearmodal's message naming the file, not a JSONDecodeError."""
+    import zipfile
+
+    bad = tmp_path / "damaged.fmu"
+    with zipfile.ZipFile(pair_fmu) as src, zipfile.ZipFile(bad, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item)
+            if item.filename.endswith("gearmodal_fmu.json"):
+                data = data[:len(data) // 2]
+            dst.writestr(item, data)
+    out = calls(bad, "")
+    assert out[-1].startswith("INSTANTIATE")
+    assert any("gearmodal_fmu.json" in line and "rebuild the FMU" in line for line in out)
+
+
+def test_start_time(pair_fmu):
+    """Any start time: the gearbox's time 0 is the first communication point, so a
+    time-invariant setup gives the same outputs from t = 1 s as from t = 0 (to the bit)."""
+    sv = {"pinion.torque": 2.0, "wheel.torque": -1.0}
+    a = simulate(pair_fmu, 0.01, start_values=sv)
+    b = simulate(pair_fmu, 1.01, start_values=sv, start_time=1.0)
+    assert len(a) == len(b) == 11
+    np.testing.assert_allclose(b["time"] - 1.0, a["time"], atol=1e-12)
+    for name in a.dtype.names[1:]:
+        np.testing.assert_array_equal(a[name], b[name], err_msg=name)

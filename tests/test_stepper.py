@@ -445,6 +445,15 @@ def test_stepper_misuse_is_named(pair):
     st.advance(0.002)
     with pytest.raises(gm.ModelError, match=r"t_end = 0.001: must be after the time reached"):
         st.reserve(0.001)
+    # a call whose arrays cannot fit is refused before they are made, naming the size
+    with pytest.raises(gm.ModelError, match=r"^t: advancing to t = 1000000000.0 s "
+                       r"\(9,999,999,999,980 output steps in one call\).*GB"):
+        st.advance(1e9)
+    kept = gm.Stepper(pair, dt=1e-4, loads={"pinion.torque": 1.0}, record=True)
+    with pytest.raises(gm.ModelError, match=r"^t: advancing to t = 1000000.0 s"):
+        kept.advance(1e6)
+    assert st.time == 0.002 and kept.time == 0.0  # nothing advanced
+    st.advance(0.003)  # and the run goes on
 
     def law(w):
         raise ValueError("slip out of the table")

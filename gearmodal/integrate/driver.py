@@ -326,14 +326,15 @@ def available_memory() -> float | None:
     return None
 
 
-def check_fits(rows: int, values: int, advice: str) -> None:
+def check_fits(rows: int, values: int, advice: str, field: str = "t_end",
+               what: str = "the run") -> None:
     """Refuse a run whose ``rows`` output rows of ``values`` float64 values each would not fit
     in the memory the machine has available (with the run's other arrays: taken as twice the
-    rows), naming what it would need and ``advice`` (how to reduce it)."""
+    rows), naming ``field``, what it would need and ``advice`` (how to reduce it)."""
     need = 2.0 * rows * values * 8.0
     have = available_memory()
     if have is not None and need > 0.8 * have:
-        raise ModelError("t_end", f"the run would hold {rows:,} output rows of {values} values "
+        raise ModelError(field, f"{what} would hold {rows:,} output rows of {values} values "
                          f"in memory, about {need / 1e9:.3g} GB; this machine has "
                          f"{have / 1e9:.3g} GB available: {advice}")
 

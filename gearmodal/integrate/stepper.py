@@ -443,6 +443,7 @@ class Stepper:
             raise ModelError("t", f"= {t!r}: must be after the time reached ({self.time!r} "
                              f"s) by a whole number of output steps dt = {self.dt!r} s")
         k0 = self.run.k
+        self._check_size(t, k0, k1)
         if self._reserved is not None and k1 > self._reserved:
             raise ModelError("t", f"= {t!r}: beyond the rows reserved (reserve(t_end) up to "
                              f"{self._t(self._reserved)!r} s)")
@@ -500,6 +501,21 @@ class Stepper:
             self._rebase()
         self._cpu += time.process_time() - cpu
         return self.values()
+
+    def _check_size(self, t: float, k0: int, k1: int) -> None:
+        """Refuse (naming the size) a call whose arrays would not fit in memory before they
+        are made: the call's state rows, force grid and azimuths, and the history when the
+        rows are kept in memory (``record=True`` without ``out``)."""
+        n_c = len(self.asm.contacts.element)
+        n_sp = len(self.asm.springs) if self.asm.springs is not None else 0
+        advice = ("advance in shorter calls (the host's communication step) or take a longer "
+                  "dt")
+        check_fits(k1 - k0 + 1, 2 * self.n + n_c + self._F.size + 1, advice, field="t",
+                   what=f"advancing to t = {t!r} s ({k1 - k0:,} output steps in one call)")
+        if self.record and self.sink is None and self._reserved is None:
+            check_fits(k1 + 1, 4 * self.n + n_c + n_sp, "give out=DIR (the rows go to disk as "
+                       "the run goes), record=False, a longer dt or a shorter run", field="t",
+                       what=f"advancing to t = {t!r} s with the rows kept (record=True)")
 
     def values(self) -> dict[str, float]:
         """The outputs (:attr:`outputs`) at the time reached."""
