@@ -543,9 +543,14 @@ _WRITE_ERRORS = {errno.EACCES, errno.EPERM, errno.EROFS, errno.ENOSPC, errno.EDQ
 
 
 def _check_writable(folder: str) -> None:
-    """``--out`` can be written: made if missing and a file created and removed in it;
-    otherwise a :class:`ModelError` naming the folder and the cause."""
+    """``--out`` can be written: a folder (not a file), made if missing and a file created and
+    removed in it; otherwise a :class:`ModelError` naming the folder and the cause."""
     p = Path(folder)
+    if p.exists() and not p.is_dir():
+        raise ModelError("--out", f"= {folder!r} is a file, not a folder")
+    for up in p.parents:  # a file where a parent folder would be made
+        if up.exists() and not up.is_dir():
+            raise ModelError("--out", f"= {folder!r}: {str(up)!r} is a file, not a folder")
     probe = p / f".gearmodal-write-test-{os.getpid()}"
     try:
         p.mkdir(parents=True, exist_ok=True)
@@ -557,12 +562,10 @@ def _check_writable(folder: str) -> None:
 
 
 def _out_folder(value: str) -> str:
-    """``--out``: a folder to write into (made if missing), not a file, not empty."""
+    """``--out``: a folder to write into, not empty (that it is a folder, made if missing,
+    :func:`_check_writable` checks with gearmodal's one-line message)."""
     if not value or "\x00" in value:
         raise argparse.ArgumentTypeError(f"{value!r}: give an output folder")
-    p = Path(value)
-    if p.exists() and not p.is_dir():
-        raise argparse.ArgumentTypeError(f"{value!r} is a file, not a folder")
     return value
 
 

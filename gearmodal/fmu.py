@@ -77,6 +77,11 @@ def export_fmu(model_file, out, *, inputs: list[str] | None = None,
     out = Path(out)
     if out.suffix != ".fmu":
         raise ModelError("--out", f"= {str(out)!r}: give a file name ending in .fmu")
+    if out.is_dir():
+        raise ModelError("--out", f"= {str(out)!r} is a folder: give the FMU's file name")
+    for up in out.parents:  # a file where the FMU's folder would be made
+        if up.exists() and not up.is_dir():
+            raise ModelError("--out", f"= {str(out)!r}: {str(up)!r} is a file, not a folder")
     names = model.assemble().load_names
     inputs = wheel_torques(model) if inputs is None else list(inputs)
     for name in inputs:

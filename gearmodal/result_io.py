@@ -490,21 +490,49 @@ class TableWriter:
                 self._parts / f"part-{self._n_parts:05d}.parquet", table.schema,
                 **_parquet_options(table))
             self._n_parts += 1
-        self._writer.write_table(table, row_group_size=max(len(table), 1))
+        try:
+            self._writer.write_table(table, row_group_size=max(len(table), 1))
+        except BaseException:
+            self._abandon()
+            raise
         self.n_rows += len(table)
         self._t, self._rows, self._n = [], [], 0
         self._groups += 1
         if self._groups % PART_GROUPS == 0:  # a part full: its descriptions freed
+            self._close_writer()
+
+    def _close_writer(self) -> None:
+        try:
             self._writer.close()
-            self._writer = None
+        except BaseException:
+            self._abandon()
+            raise
+        self._writer = None
+
+    def _abandon(self) -> None:
+        """Drop the writer after a failed write (a full disk): closed once, quietly, and
+        marked closed, so that its ``__del__`` does not try again and print the error a
+        second time ("Exception ignored in ParquetWriter.__del__") after the clean one."""
+        w, self._writer = self._writer, None
+        if w is None:
+            return
+        try:
+            w.close()
+        except Exception:  # the error being raised is the one to report
+            pass
+        w.is_open = False
+        if getattr(w, "file_handle", None) is not None:
+            try:
+                w.file_handle.close()
+            except Exception:
+                pass
 
     def close(self) -> Path:
         """Write what is left and close the table; returns its path."""
         if self._n or self._n_parts == 0:
             self._flush()
         if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+            self._close_writer()
         remove_table(self.path)
         if self._n_parts == 1:
             (self._parts / "part-00000.parquet").replace(self.path)

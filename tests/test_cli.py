@@ -140,9 +140,21 @@ def test_python_dash_m_runs_the_command_line():
     assert out.strip() == f"gearmodal {gm.__version__}"
 
 
-def test_docs_figures_refuses_a_file_as_out(tmp_path, capsys):
+@pytest.mark.parametrize("argv, message", [
+    (["docs-figures", "--out", "{f}"], "is a file, not a folder"),
+    (["study", "power-curve", "--out", "{f}"], "is a file, not a folder"),
+    (["study", "power-curve", "--out", "{f}/sub"], "is a file, not a folder"),
+    (["fmu", "studies/models/gear_pair.toml", "--out", "{f}/x.fmu"], "is a file, not a folder"),
+    (["fmu", "studies/models/gear_pair.toml", "--out", "{d}.fmu"], "is a folder"),
+])
+def test_a_file_where_a_folder_goes_is_one_line(tmp_path, capsys, argv, message):
+    """Issue 62: an output folder that is a file, or under one, and an FMU path that is a
+    folder: exit 2 with gearmodal's one-line message, before anything is computed."""
     f = tmp_path / "f"
     f.write_text("x")
-    with pytest.raises(SystemExit) as e:
-        main(["docs-figures", "--out", str(f)])
-    assert e.value.code == 2 and "is a file, not a folder" in capsys.readouterr().err
+    (tmp_path / "d.fmu").mkdir()
+    argv = [a.format(f=f, d=tmp_path / "d") for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("gearmodal: error: --out") and message in err
+    assert err.count("\n") == 1, err
