@@ -66,14 +66,6 @@ def export_fmu(model_file, out, *, inputs: list[str] | None = None,
     geometry turns with the drivetrain, for a host that drives it at a varying speed). Every
     name is checked (a :class:`ModelError` names the wrong one)
     by making the stepper once before the FMU is written."""
-    try:
-        from pythonfmu import FmuBuilder
-    except ImportError:
-        raise ModelError("fmu", "needs pythonfmu: pip install 'gearmodal[fmu]'") from None
-    from .integrate.stepper import Drive, Stepper
-
-    src = Path(model_file)
-    model = load(src)
     out = Path(out)
     if out.suffix != ".fmu":
         raise ModelError("--out", f"= {str(out)!r}: give a file name ending in .fmu")
@@ -82,6 +74,14 @@ def export_fmu(model_file, out, *, inputs: list[str] | None = None,
     for up in out.parents:  # a file where the FMU's folder would be made
         if up.exists() and not up.is_dir():
             raise ModelError("--out", f"= {str(out)!r}: {str(up)!r} is a file, not a folder")
+    try:
+        from pythonfmu import FmuBuilder
+    except ImportError:
+        raise ModelError("fmu", "needs pythonfmu: pip install 'gearmodal[fmu]'") from None
+    from .integrate.stepper import Drive, Stepper
+
+    src = Path(model_file)
+    model = load(src)
     names = model.assemble().load_names
     inputs = wheel_torques(model) if inputs is None else list(inputs)
     for name in inputs:

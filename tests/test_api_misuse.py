@@ -154,7 +154,8 @@ def test_a_damaged_saved_table_is_refused_naming_it(tmp_path):
         gm.SimulationResult.load(tmp_path)  # its SHA-256
     # a result saved before the checksums: the pages' CRCs still refuse it when read
     head = json.loads((tmp_path / "result.json").read_text())
-    del head["sha256"]
+    del head["sha256"], head["header_sha256"]
+    head["version"] = 1  # the layout before the checksums
     (tmp_path / "result.json").write_text(json.dumps(head))
     back = gm.SimulationResult.load(tmp_path)
     with pytest.raises(gm.ModelError, match=r"forces\.parquet is unreadable"):

@@ -203,6 +203,15 @@ def _flag_cases():
     yield "flag-out-file", "argv-outfile", ["modal", model], "out", REFUSE
     yield "flag-no-model", "argv", ["modal", "no_such.toml"], "no_such", REFUSE
     yield "flag-speed-neg", "argv", ["modal", model, "--speed", "-5"], "speed", REFUSE
+    # issue 62's command-line cases
+    yield "flag-study-out-file", "argv-outfile", ["study", "power-curve"], "out", REFUSE
+    yield ("flag-study-out-under-file", "argv-underfile", ["study", "power-curve"], "out",
+           REFUSE)
+    yield ("flag-fmu-out-under-file", "argv-underfile-fmu", ["fmu", model], "out", REFUSE)
+    yield ("flag-fmu-drive-stiffness-alone", "argv",
+           ["fmu", model, "--drive-stiffness", "2e3"], "drive-stiffness", REFUSE)
+    yield ("flag-fmu-rebase-dt-fixed", "argv", ["fmu", model, "--rebase-dt", "0.01"],
+           "rebase-dt", REFUSE)
     yield "flag-speed-huge", "argv", ["modal", model, "--speed", "1e300"], "speed", REFUSE
 
 
@@ -255,6 +264,10 @@ def _run(kind, payload, tmp: Path) -> list[str]:
     if kind == "argv-outfile":
         (tmp / "taken").write_text("x")
         return [*payload, "--out", str(tmp / "taken")]
+    if kind in ("argv-underfile", "argv-underfile-fmu"):
+        (tmp / "taken").write_text("x")
+        leaf = "x.fmu" if kind.endswith("fmu") else "run"
+        return [*payload, "--out", str(tmp / "taken" / leaf)]
     argv = list(payload)
     if "--out" not in argv:
         argv += ["--out", str(out)]
@@ -319,3 +332,76 @@ def test_the_cases_cover_the_issues_examples():
                  "turbine-scene-turbulence_intensity = \"high\""):
         assert must in ids, must
     assert math.isfinite(len(ids))
+
+
+# -- issue 62: the co-simulation side's entries, misused through the Python API ---------------
+def _stepper(**kw):
+    import gearmodal as gm
+
+    return gm.Stepper(gm.load(ROOT / "studies" / "models" / "gear_pair.toml"), dt=1e-4,
+                      loads={"pinion.torque": 1.0}, **kw)
+
+
+def _campbell_orders():
+    import gearmodal as gm
+
+    gm.campbell(gm.load(ROOT / "studies" / "models" / "gear_pair.toml"), [0.0, 100.0],
+                orders={"x": "a"})
+
+
+def _nan_load_index():
+    import gearmodal as gm
+
+    gm.simulate(gm.load(ROOT / "studies" / "models" / "gear_pair.toml"), 0.01, dt=1e-4,
+                loads={"pinion.torque": pd.Series([1.0, 2.0, 3.0], index=[0.0, np.nan, 0.01])})
+
+
+def _law_raises():
+    import gearmodal as gm
+
+    def law(w):
+        raise ValueError("slip out of the table")
+
+    _stepper(speed_torque=gm.SpeedTorque("wheel.theta", law))
+
+
+def _edited_result(tmp: Path):
+    import json
+
+    import gearmodal as gm
+
+    r = gm.simulate(gm.load(ROOT / "studies" / "models" / "gear_pair.toml"), 0.002, dt=1e-4)
+    r.save(tmp / "run")
+    meta = json.loads((tmp / "run" / "result.json").read_text())
+    meta["initial_state"] = [1, 2]  # a wrong type (once an AttributeError)
+    (tmp / "run" / "result.json").write_text(json.dumps(meta))
+    gm.SimulationResult.load(tmp / "run")
+
+
+API_CASES = [
+    ("stepper-loads-a-list", lambda tmp: _stepper().advance(0.001, [1.0, 2.0]), "loads"),
+    ("stepper-advance-1e9-s", lambda tmp: _stepper().advance(1e9), "t"),
+    ("stepper-advance-1e6-s-recorded", lambda tmp: _stepper(record=True).advance(1e6), "t"),
+    ("stepper-advance-nan", lambda tmp: _stepper().advance(float("nan")), "t"),
+    ("stepper-load-nan", lambda tmp: _stepper().advance(0.001, {"pinion.torque": np.nan}),
+     "pinion.torque"),
+    ("stepper-reserve-passed", lambda tmp: (st := _stepper(), st.advance(0.002),
+                                            st.reserve(0.001)), "t_end"),
+    ("stepper-law-raises", lambda tmp: _law_raises(), "speed_torque"),
+    ("campbell-orders-text", lambda tmp: _campbell_orders(), "orders"),
+    ("load-index-nan", lambda tmp: _nan_load_index(), "pinion.torque"),
+    ("result-json-edited", _edited_result, "result.json"),
+]
+
+
+@pytest.mark.parametrize("case", API_CASES, ids=[c[0] for c in API_CASES])
+def test_cosimulation_misuse_is_refused_by_name(case, tmp_path):
+    """Issue 62's cases of the Python API (the FMU's are in test_fmu.py, ROSCO's and the
+    5 MW deck's in test_rosco.py and test_nrel5mw.py: they need their extras): a gearmodal
+    error naming the field, never another exception, never accepted."""
+    import gearmodal as gm
+
+    name, call, field = case
+    with pytest.raises(gm.GearmodalError) as e:
+        call(tmp_path)
+    assert field.lower() in str(e.value).lower(), f"{name}: {e.value}"
