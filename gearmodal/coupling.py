@@ -279,6 +279,8 @@ class Joint(Constraint):
     at : offset of the joint point from ``a``'s centre, m (global axes at azimuth 0).
     axes_angle : joint axes ``Rz(axes_angle)``, rad.
 
+    Notes
+    -----
     The exact residual (finite rotations) and its gradients come from the generated kernels
     ``joint_residual`` / ``joint_gradients_at`` (``symbolic/joint.py``); the coupled linear
     analyses use the gradients at the reference configuration.
@@ -436,6 +438,8 @@ class Coupled:
         your own).
     name : name used in reports.
 
+    Notes
+    -----
     Coordinates, loads and contacts of the coupled system are named
     ``"<system>.<name in the system>"``. Pass a ``Coupled`` wherever a model is accepted:
     :func:`gearmodal.modal`, :func:`gearmodal.campbell`, :func:`gearmodal.equilibrium`,

@@ -208,6 +208,8 @@ class Gear(Body):
     internal : True for a ring gear (internal teeth).
     mass, inertia, ... : as :class:`Body` (keyword-only).
 
+    Notes
+    -----
     The base radius is ``teeth * module * cos(pressure_angle) / 2`` for spur gears and
     ``teeth * m_t * cos(alpha_t) / 2`` with transverse module ``m_t = module / cos(helix)`` and
     ``tan(alpha_t) = tan(pressure_angle) / cos(helix)`` for helical gears.
