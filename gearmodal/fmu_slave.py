@@ -35,6 +35,7 @@ from pythonfmu.enums import Fmi2Status
 from .errors import GearmodalError, ModelError, SolveError
 from .integrate.stepper import Drive, Stepper
 from .model.toml_io import load
+from .units import BASE_UNITS, load_unit, output_units
 
 #: the FMU's configuration file in its resources
 CONFIG = "gearmodal_fmu.json"
@@ -57,6 +58,38 @@ ALLOWED = {
 
 #: a communication point this close (relative to the time, or to dt) to the FMU's is its own
 TIME_TOL = 1e-9
+
+
+class UnitReal(Real):
+    """A Real variable with its unit (FMI 2.0 ``unit``, defined in the description's
+    ``UnitDefinitions``; pythonfmu 0.7's Real has none)."""
+
+    def __init__(self, name: str, unit: str | None = None, **kwargs):
+        super().__init__(name, **kwargs)
+        self.unit = unit
+
+    def to_xml(self):
+        node = super().to_xml()
+        if self.unit:
+            node.find("Real").set("unit", self.unit)
+        return node
+
+
+def _describe(name: str, unit: str, kind: str) -> str:
+    """A variable's description: what it is, its unit, when it applies."""
+    if kind == "input":
+        return f"load {name} ({unit}), set at a communication step's start, held over it"
+    if name == "drive.torque":
+        return "torque of the drive's spring-damper on the host's shaft (N.m; on the " \
+               "gearbox: the opposite)"
+    if name.endswith(".velocity"):
+        return f"velocity of {name[:-9]} ({unit}; rotations absolute) at the step's end"
+    if unit in ("m", "rad"):
+        return f"coordinate {name} ({unit}; rotations absolute) at the step's end"
+    if name.rsplit(".", 1)[-1] in ("front", "back"):
+        return f"contact force on flank {name} ({unit}, >= 0: a flank only pushes) at the " \
+               "step's end"
+    return f"force of spring {name} ({unit}) at the step's end"
 
 
 class GearboxSlave(Fmi2Slave):
@@ -82,34 +115,66 @@ class GearboxSlave(Fmi2Slave):
         self.host = [float(drive.get("angle0", 0.0)), float(drive.get("speed0", 0.0))] \
             if drive else None
         par = {"causality": Fmi2Causality.parameter, "variability": Fmi2Variability.fixed}
-        self.register_variable(Real("dt", **par, getter=lambda: self.dt,
-                                    setter=lambda x: setattr(self, "dt", float(x))))
-        self.register_variable(Real("speed_rpm", **par, getter=lambda: self.speed_rpm,
-                                    setter=lambda x: setattr(self, "speed_rpm", float(x))))
-        self.register_variable(String("method", **par, getter=lambda: self.method,
-                                      setter=lambda x: setattr(self, "method", str(x))))
-        self.register_variable(String("result_dir", **par, getter=lambda: self.result_dir,
-                                      setter=lambda x: setattr(self, "result_dir", str(x))))
+        self.register_variable(UnitReal(
+            "dt", "s", **par, getter=lambda: self.dt,
+            setter=lambda x: setattr(self, "dt", float(x)),
+            description="output step (s): a communication step is a whole number of them"))
+        self.register_variable(UnitReal(
+            "speed_rpm", "rpm", **par, getter=lambda: self.speed_rpm,
+            setter=lambda x: setattr(self, "speed_rpm", float(x)),
+            description="speed of the reference rotation at the input (rpm)"))
+        self.register_variable(String(
+            "method", **par, getter=lambda: self.method,
+            setter=lambda x: setattr(self, "method", str(x)),
+            description="integration method: exact (default), newmark or scipy"))
+        self.register_variable(String(
+            "result_dir", **par, getter=lambda: self.result_dir,
+            setter=lambda x: setattr(self, "result_dir", str(x)),
+            description="folder the gearbox's own result streams to (empty: none kept)"))
         for name in self.u:
-            self.register_variable(Real(
-                name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-                getter=lambda n=name: self.u[n],
-                setter=lambda x, n=name: self.u.__setitem__(n, float(x))))
+            unit = load_unit(name)
+            self.register_variable(UnitReal(
+                name, unit, causality=Fmi2Causality.input,
+                variability=Fmi2Variability.continuous, getter=lambda n=name: self.u[n],
+                setter=lambda x, n=name: self.u.__setitem__(n, float(x)),
+                description=_describe(name, unit, "input")))
         if self.host is not None:
-            for i, name in enumerate(("drive.angle", "drive.speed")):
-                self.register_variable(Real(
-                    name, causality=Fmi2Causality.input,
+            for i, (name, unit, what) in enumerate((
+                    ("drive.angle", "rad", "angle"), ("drive.speed", "rad/s", "speed"))):
+                self.register_variable(UnitReal(
+                    name, unit, causality=Fmi2Causality.input,
                     variability=Fmi2Variability.continuous,
                     getter=lambda i=i: self.host[i],
-                    setter=lambda x, i=i: self.host.__setitem__(i, float(x))))
+                    setter=lambda x, i=i: self.host.__setitem__(i, float(x)),
+                    description=f"the host's shaft {what} ({unit}, absolute) at the step's "
+                                f"start; it turns at drive.speed over the step"))
         self.stepper = self._stepper()
         self.values = self.stepper.values()
+        units = output_units(self.model, self.cfg["outputs"])
         for name in self.cfg["outputs"]:
             # initial exact: the outputs at the start are known (fmpy's validation asks for
             # it: PythonFMU issue 193)
-            self.register_variable(Real(
-                name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
-                initial=Fmi2Initial.exact, getter=lambda n=name: self.values[n]))
+            self.register_variable(UnitReal(
+                name, units[name], causality=Fmi2Causality.output,
+                variability=Fmi2Variability.continuous, initial=Fmi2Initial.exact,
+                getter=lambda n=name: self.values[n],
+                description=_describe(name, units[name], "output")))
+
+    def to_xml(self, model_options=None):
+        """pythonfmu's model description with the units used defined (``UnitDefinitions``
+        after ``CoSimulation``, as FMI 2.0's schema orders them)."""
+        from xml.etree.ElementTree import Element, SubElement
+
+        root = super().to_xml(model_options or {})
+        used = sorted({v.unit for v in self.vars.values() if getattr(v, "unit", None)})
+        if used:
+            defs = Element("UnitDefinitions")
+            for unit in used:
+                base = {k: str(x) for k, x in BASE_UNITS[unit].items()}
+                SubElement(SubElement(defs, "Unit", name=unit), "BaseUnit", base)
+            at = [c.tag for c in root].index("CoSimulation") + 1
+            root.insert(at, defs)
+        return root
 
     # -- the state machine ------------------------------------------------------------------
 

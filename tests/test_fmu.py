@@ -325,3 +325,29 @@ def test_start_time(pair_fmu):
     np.testing.assert_allclose(b["time"] - 1.0, a["time"], atol=1e-12)
     for name in a.dtype.names[1:]:
         np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+
+
+def test_every_variable_has_its_unit_and_description(tmp_path):
+    """Issue 58: each Real variable declares its SI unit (defined in UnitDefinitions with its
+    base units, so a host converts), each variable a description; fmpy validates it."""
+    fmu = tmp_path / "stage.fmu"
+    assert main(["fmu", "studies/models/planetary_clearance.toml", "--out", str(fmu),
+                 "--drive", "carrier.theta", "--drive-stiffness", "5e7"]) == 0
+    assert validate_fmu(str(fmu)) == []
+    md = fmpy.read_model_description(str(fmu))
+    units = {u.name: u for u in md.unitDefinitions}
+    by = {v.name: v for v in md.modelVariables}
+    assert all(v.description for v in md.modelVariables)
+    for v in md.modelVariables:
+        if v.type == "Real":
+            assert v.unit in units, v.name
+    expect = {"dt": "s", "speed_rpm": "rpm", "sun.torque": "N.m", "drive.angle": "rad",
+              "drive.speed": "rad/s", "drive.torque": "N.m", "carrier.theta": "rad",
+              "carrier.theta.velocity": "rad/s", "sun_planet1.front": "N",
+              "carrier_bearing.x": "N"}
+    for name, unit in expect.items():
+        assert by[name].unit == unit, name
+    rpm = units["rpm"].baseUnit
+    assert rpm.rad == 1 and rpm.s == -1 and rpm.factor == pytest.approx(np.pi / 30, rel=1e-15)
+    assert (units["N.m"].baseUnit.kg, units["N.m"].baseUnit.m, units["N.m"].baseUnit.s) == \
+        (1, 2, -2)
