@@ -293,7 +293,19 @@ def cmd_study(args) -> int:
         if key == "seeds" and value < 1:
             raise ModelError(flags[key], f"= {value!r}: must be an integer >= 1")
         kwargs[key] = value
-    summary = mod.run(args.out, **kwargs)
+    if args.scheduler is not None:
+        if "max_workers" not in params:
+            raise ModelError("--scheduler", f"the {args.study} study runs no sweep of cases "
+                             "to send to a cluster")
+        if args.workers is not None:
+            raise ModelError("--workers", "the cluster's workers run the cases: give "
+                             "--scheduler or --workers, not both")
+        from .studies import on_cluster
+
+        with on_cluster(args.scheduler):
+            summary = mod.run(args.out, **kwargs)
+    else:
+        summary = mod.run(args.out, **kwargs)
     with __import__("pandas").option_context("display.width", 160, "display.max_columns", 8):
         print(summary)
     print(f"wrote {args.out}/summary.csv and report.html")
@@ -485,6 +497,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "(turbine studies; default 500, its error in docs/guide/fidelity.md; "
                          "0: the full model, about 2x slower)")
     st.add_argument("--workers", type=int, help="parallel processes (default: CPU count)")
+    st.add_argument("--scheduler", metavar="ADDRESS",
+                    help="run the cases on the Dask scheduler at ADDRESS (tcp://host:8786; "
+                         "the dask extra) instead of local processes")
     st.add_argument("--studies", help="folder of the study scripts (default: the source "
                     "tree's studies/)")
     st.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -20,6 +20,7 @@ them and runs only the others.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import hashlib
 import json
 import math
@@ -40,7 +41,46 @@ from .result_io import sha256_of
 from .store import Store
 from .summary import summarize
 
-__all__ = ["load_result", "load_table", "summarize", "sweep"]
+__all__ = ["load_result", "load_table", "on_cluster", "summarize", "sweep"]
+
+#: how long :func:`on_cluster` waits for a scheduler to answer, s
+SCHEDULER_TIMEOUT = 30.0
+
+#: the executors of the clusters entered (:func:`on_cluster`): a sweep given no executor uses
+#: the innermost
+_CLUSTERS: list = []
+
+
+@contextlib.contextmanager
+def on_cluster(address: str, timeout: float | None = None):
+    """Run every sweep inside the ``with`` block (a study's cases) on the Dask scheduler at
+    ``address`` (``"tcp://host:8786"``; ``gearmodal study ... --scheduler ADDRESS``), unless
+    the sweep is given its own executor. Yields the ``distributed.Client``.
+
+    The scene path is sent resolved, so workers may run in any folder of a file system they
+    share with the caller. The rows come back to the caller, which stores them. Needs the
+    ``dask`` extra. An address with no scheduler behind it is a :class:`ModelError` after
+    ``timeout`` s (default :data:`SCHEDULER_TIMEOUT`).
+    """
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ModelError("--scheduler", "needs dask.distributed: pip install "
+                         "'gearmodal[dask]'") from None
+    if not isinstance(address, str) or not address.strip():
+        raise ModelError("--scheduler", f"= {address!r}: give the scheduler's address, "
+                         "e.g. tcp://host:8786")
+    try:
+        client = Client(address, timeout=SCHEDULER_TIMEOUT if timeout is None else timeout)
+    except (OSError, TimeoutError, ValueError) as e:
+        raise ModelError("--scheduler", f"= {address!r}: no Dask scheduler answered there "
+                         f"({type(e).__name__}: {str(e).splitlines()[0][:120]})") from None
+    _CLUSTERS.append(client.get_executor())
+    try:
+        yield client
+    finally:
+        _CLUSTERS.pop()
+        client.close()
 
 # -- cases --------------------------------------------------------------------------------------
 def _cases(parameters) -> tuple[list, list[dict]]:
@@ -377,6 +417,12 @@ def sweep(scene, parameters, executor: cf.Executor | None = None, store=None, *,
 
     bar = tqdm(total=len(cases), initial=len(cases) - len(todo), disable=not progress,
                desc="sweep", unit="case")
+    if executor is None and _CLUSTERS and todo:
+        if max_workers is not None:
+            raise ModelError("max_workers", f"= {max_workers!r}: the sweep runs on a "
+                             "cluster (on_cluster, --scheduler): its workers are the "
+                             "cluster's")
+        executor = _CLUSTERS[-1]
     own = executor is None and todo
     if own:
         executor = cf.ProcessPoolExecutor(max_workers=min(max_workers or os.cpu_count() or 1,

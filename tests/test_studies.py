@@ -413,3 +413,47 @@ def test_a_worker_that_dies_is_named_and_the_rest_is_kept(tmp_path):
     with pytest.raises(gm.SolveError, match=r"worker process died.*run the sweep again"):
         gm.sweep(_dies_on_one, [{"x": 0}, {"x": 1}], metrics=_as_row, max_workers=1,
                  store=tmp_path, progress=False)
+
+
+@pytest.mark.slow
+def test_a_study_runs_on_a_scheduler_given_by_address(tmp_path, monkeypatch, capsys):
+    """Issue 58: ``gearmodal study ... --scheduler ADDRESS`` sends the cases to a Dask
+    scheduler whose workers started in another folder (relative paths would not resolve
+    there): the same rows as the local process pool, to the bit."""
+    distributed = pytest.importorskip("distributed", reason="the dask extra (CI installs it)")
+    from gearmodal.cli import main
+
+    elsewhere, caller = tmp_path / "elsewhere", tmp_path / "caller"
+    elsewhere.mkdir()
+    caller.mkdir()
+    monkeypatch.chdir(elsewhere)  # the workers start (and stay) here
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        monkeypatch.chdir(caller)  # the caller, with a relative --out
+        argv = ["study", "double-contact", "--duration", "0.2", "--seeds", "1", "--quiet"]
+        assert main([*argv, "--out", "rel_out_dask", "--scheduler",
+                     cluster.scheduler_address]) == 0
+        with distributed.Client(cluster) as client:
+            assert set(client.run(os.getcwd).values()) == {str(elsewhere)}
+    assert main([*argv, "--out", str(tmp_path / "local"), "--workers", "1"]) == 0
+    a = pd.read_csv(caller / "rel_out_dask" / "summary.csv", index_col="case")
+    b = pd.read_csv(tmp_path / "local" / "summary.csv", index_col="case")
+    num = [c for c in a.columns if a[c].dtype.kind == "f" and "cpu" not in c]
+    assert len(a) == 3 and len(num) > 3
+    pd.testing.assert_frame_equal(a[num].sort_index(), b[num].sort_index(), check_exact=True)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--scheduler", "tcp://127.0.0.1:9", "--workers", "2"], "--workers"),
+    (["--scheduler", "tcp://127.0.0.1:9"], "no Dask scheduler answered"),
+])
+def test_a_bad_scheduler_is_one_line(tmp_path, capsys, monkeypatch, argv, message):
+    pytest.importorskip("distributed", reason="the dask extra (CI installs it)")
+    from gearmodal import studies
+    from gearmodal.cli import main
+
+    monkeypatch.setattr(studies, "SCHEDULER_TIMEOUT", 2.0)  # nothing listens on port 9
+    assert main(["study", "double-contact", "--out", str(tmp_path / "o"), "--quiet",
+                 *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1, err
