@@ -565,7 +565,8 @@ def _check_writable(folder: str) -> None:
         raise ModelError("--out", f"= {folder!r} is a file, not a folder")
     for up in p.parents:  # a file where a parent folder would be made
         if up.exists() and not up.is_dir():
-            raise ModelError("--out", f"= {folder!r}: {str(up)!r} is a file, not a folder")
+            raise ModelError("--out", f"= {folder!r}: cannot write there ({str(up)!r} is "
+                                 "a file, not a folder)")
     probe = p / f".gearmodal-write-test-{os.getpid()}"
     try:
         p.mkdir(parents=True, exist_ok=True)

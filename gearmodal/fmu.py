@@ -73,7 +73,8 @@ def export_fmu(model_file, out, *, inputs: list[str] | None = None,
         raise ModelError("--out", f"= {str(out)!r} is a folder: give the FMU's file name")
     for up in out.parents:  # a file where the FMU's folder would be made
         if up.exists() and not up.is_dir():
-            raise ModelError("--out", f"= {str(out)!r}: {str(up)!r} is a file, not a folder")
+            raise ModelError("--out", f"= {str(out)!r}: cannot write there ({str(up)!r} is "
+                                 "a file, not a folder)")
     try:
         from pythonfmu import FmuBuilder
     except ImportError:
