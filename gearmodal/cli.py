@@ -560,13 +560,13 @@ _WRITE_ERRORS = {errno.EACCES, errno.EPERM, errno.EROFS, errno.ENOSPC, errno.EDQ
 def _check_writable(folder: str) -> None:
     """``--out`` can be written: a folder (not a file), made if missing and a file created and
     removed in it; otherwise a :class:`ModelError` naming the folder and the cause."""
+    from .result_io import file_in_the_way
+
     p = Path(folder)
-    if p.exists() and not p.is_dir():
-        raise ModelError("--out", f"= {folder!r} is a file, not a folder")
-    for up in p.parents:  # a file where a parent folder would be made
-        if up.exists() and not up.is_dir():
-            raise ModelError("--out", f"= {folder!r}: cannot write there ({str(up)!r} is "
-                                 "a file, not a folder)")
+    if (f := file_in_the_way(p)) is not None:
+        raise ModelError("--out", f"= {folder!r} is a file, not a folder" if f == p else
+                         f"= {folder!r}: cannot write there ({str(f)!r} is a file, not a "
+                         "folder)")
     probe = p / f".gearmodal-write-test-{os.getpid()}"
     try:
         p.mkdir(parents=True, exist_ok=True)

@@ -31,6 +31,7 @@ from pathlib import Path
 from .errors import ModelError, unknown
 from .model.model import Model
 from .model.toml_io import load
+from .result_io import file_in_the_way
 
 __all__ = ["DEFAULT_DT", "export_fmu", "wheel_torques"]
 
@@ -71,10 +72,9 @@ def export_fmu(model_file, out, *, inputs: list[str] | None = None,
         raise ModelError("--out", f"= {str(out)!r}: give a file name ending in .fmu")
     if out.is_dir():
         raise ModelError("--out", f"= {str(out)!r} is a folder: give the FMU's file name")
-    for up in out.parents:  # a file where the FMU's folder would be made
-        if up.exists() and not up.is_dir():
-            raise ModelError("--out", f"= {str(out)!r}: cannot write there ({str(up)!r} is "
-                                 "a file, not a folder)")
+    if (f := file_in_the_way(out.parent)) is not None:  # where the FMU's folder would be
+        raise ModelError("--out", f"= {str(out)!r}: cannot write there ({str(f)!r} is a file, "
+                         "not a folder)")
     try:
         from pythonfmu import FmuBuilder
     except ImportError:

@@ -186,24 +186,30 @@ class GearboxSlave(Fmi2Slave):
         self.log(msg, Fmi2Status.error)
         return msg
 
-    def _check(self, call: str, kind: str | None = None) -> None:
+    def _state_error(self, call: str) -> str:
+        """Why ``call`` is not allowed in the present state ('' if it is)."""
+        allowed = ALLOWED[call]
+        if self.state in allowed:
+            return ""
+        why = f"allowed in {', '.join(allowed)}"
+        if self.state == "stepFailed" and self.failure:
+            why += f" (the step failed: {self.failure})"
+        return why
+
+    def _check(self, call: str) -> None:
         """Refuse (raise: ``fmi2Fatal`` with the message) ``call`` outside its states."""
-        allowed = ALLOWED[call if kind is None else f"{call} {kind}"]
-        if self.state not in allowed:
-            why = f"allowed in {', '.join(allowed)}"
-            if self.state == "stepFailed" and self.failure:
-                why += f" (the step failed: {self.failure})"
+        why = self._state_error(call)
+        if why:
             raise ModelError(call, self._refuse(call, why, state=True))
 
     def _vars(self, call: str, vrs) -> list:
-        out = []
-        for vr in vrs:
-            if vr not in self.vars:
-                raise ModelError(call, self._refuse(call, f"no variable has value reference "
-                                                          f"{vr} (this FMU has 0 to "
-                                                          f"{len(self.vars) - 1})"))
-            out.append(self.vars[vr])
-        return out
+        """The variables of value references ``vrs``; an unknown one refused by name."""
+        try:
+            return [self.vars[vr] for vr in vrs]
+        except KeyError as e:
+            raise ModelError(call, self._refuse(
+                call, f"no variable has value reference {e.args[0]} (this FMU has 0 to "
+                      f"{len(self.vars) - 1})")) from None
 
     def _may_set(self, call: str, vrs, values) -> None:
         for var, val in zip(self._vars(call, vrs), values, strict=True):
@@ -220,6 +226,17 @@ class GearboxSlave(Fmi2Slave):
                 why = _parameter_error(var.name, val)
                 if why:
                     raise ModelError(call, self._refuse(call, why))
+
+    def _get(self, call: str, read, vrs) -> list:
+        """``read(vrs)`` (pythonfmu's getter) in a state that allows it; an unknown value
+        reference refused by name (looked up only when pythonfmu's lookup fails: a host
+        reads every output every step)."""
+        self._check("fmi2Get")
+        try:
+            return read(vrs)
+        except KeyError:
+            self._vars(call, vrs)
+            raise
 
     def set_real(self, vrs, values):
         self._may_set("fmi2SetReal", vrs, values)
@@ -238,24 +255,16 @@ class GearboxSlave(Fmi2Slave):
         super().set_boolean(vrs, values)
 
     def get_real(self, vrs):
-        self._check("fmi2Get")
-        self._vars("fmi2GetReal", vrs)
-        return super().get_real(vrs)
+        return self._get("fmi2GetReal", super().get_real, vrs)
 
     def get_string(self, vrs):
-        self._check("fmi2Get")
-        self._vars("fmi2GetString", vrs)
-        return super().get_string(vrs)
+        return self._get("fmi2GetString", super().get_string, vrs)
 
     def get_integer(self, vrs):
-        self._check("fmi2Get")
-        self._vars("fmi2GetInteger", vrs)
-        return super().get_integer(vrs)
+        return self._get("fmi2GetInteger", super().get_integer, vrs)
 
     def get_boolean(self, vrs):
-        self._check("fmi2Get")
-        self._vars("fmi2GetBoolean", vrs)
-        return super().get_boolean(vrs)
+        return self._get("fmi2GetBoolean", super().get_boolean, vrs)
 
     # -- the calls --------------------------------------------------------------------------
 
@@ -293,10 +302,8 @@ class GearboxSlave(Fmi2Slave):
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         call = "fmi2DoStep"
-        if self.state != "stepComplete":
-            why = f"allowed in {', '.join(ALLOWED[call])}"
-            if self.state == "stepFailed" and self.failure:
-                why += f"; the step failed: {self.failure}"
+        why = self._state_error(call)
+        if why:
             self._refuse(call, why, state=True)
             return False
         why = self._step_error(current_time, step_size)

@@ -18,7 +18,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-import math
 import os
 import shutil
 import uuid
@@ -152,32 +151,20 @@ def _header_digest(head: dict) -> str:
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 
 
-def _finite_pair(x) -> bool:
-    return (isinstance(x, list) and len(x) == 2
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                    and math.isfinite(v) for v in x) and x[0] <= x[1])
-
-
-#: what each field of a result header may hold: (test, what it must be); a header edited to
-#: another type is refused naming the field, not met later as an AttributeError
-HEADER_FIELDS = {
-    "initial_state": (lambda x: isinstance(x, dict)
-                      and all(isinstance(v, bool) for v in x.values()),
-                      "a table {contact name: true or false}"),
-    "constraints": (lambda x: isinstance(x, bool), "true or false"),
-    "tables": (lambda x: x in ("parquet", "csv"), "'parquet' or 'csv'"),
-    "span": (lambda x: x is None or _finite_pair(x), "[start, end] in s, or null"),
-    "sha256": (lambda x: isinstance(x, dict)
-               and all(isinstance(k, str) and isinstance(v, str) for k, v in x.items()),
-               "a table {file name: SHA-256 digest}"),
-}
+def file_in_the_way(path) -> Path | None:
+    """The file at ``path`` or at one of its parent folders, where a folder would have to be
+    made to write ``path`` (``None``: nothing in the way)."""
+    for p in (Path(path), *Path(path).parents):
+        if p.exists() and not p.is_dir():
+            return p
+    return None
 
 
 def read_header(directory, kind: str, version: int | tuple[int, ...],
-                header: str = HEADER, fields: tuple[str, ...] = ()) -> dict:
+                header: str = HEADER) -> dict:
     """The header (``header``) of a result directory written by ``kind``'s ``save`` at
-    ``version`` (or one of several), each of ``fields`` (present) checked against
-    :data:`HEADER_FIELDS`; :class:`ModelError` naming the directory otherwise."""
+    ``version`` (or one of several), its fields as saved (``header_sha256``);
+    :class:`ModelError` naming the directory otherwise."""
     d = Path(directory)
     if not d.is_dir():
         raise ModelError("directory", f"= {str(d)!r}: no such result directory")
@@ -202,11 +189,6 @@ def read_header(directory, kind: str, version: int | tuple[int, ...],
     if "header_sha256" in head and head["header_sha256"] != _header_digest(head):
         raise ModelError("directory", f"= {str(d)!r}: {header} was changed or damaged after it "
                          "was saved (its digest does not match): save the result again")
-    for key in fields:
-        if key in head and not HEADER_FIELDS[key][0](head[key]):
-            raise ModelError("directory", f"= {str(d)!r}: {header}'s {key} = "
-                             f"{head[key]!r:.80}: must be {HEADER_FIELDS[key][1]} (the file "
-                             "was edited or damaged; save the result again)")
     return head
 
 

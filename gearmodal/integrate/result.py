@@ -742,8 +742,7 @@ class SimulationResult:
         as JSON holds them (values JSON cannot hold come back as their text). A directory of
         an older layout is refused naming it."""
         d = Path(directory)
-        head = read_header(d, "SimulationResult", (1, SAVE_VERSION),
-                           fields=("initial_state", "constraints", "tables", "span", "sha256"))
+        head = read_header(d, "SimulationResult", (1, SAVE_VERSION))
         if head["version"] >= 2 and "sha256" not in head:
             raise ModelError("directory", f"= {str(d)!r}: result.json has no sha256 (every "
                              "save of this layout writes it): edited or damaged; save the "
