@@ -96,6 +96,54 @@ def test_rear_force_of_an_overhung_rotor_by_statics():
     assert run.loads.rear_force_z_N.iloc[0] == pytest.approx(expect, rel=1e-3)
 
 
+def test_a_coned_rotor_on_a_tilted_shaft():
+    """The rotor's geometry (gearmodal/turbine/rotor.py, Turbine.blade_wind) by closed forms:
+    without cone and tilt the wind at the elements is the field's own, bit for bit; a shaft
+    tilted by tau sees a horizontal wind U as U cos(tau) along it and U sin(tau) in the
+    rotor plane; a cone c takes U cos(c) of a wind along the shaft; equal blades in a
+    uniform wind cancel their in-plane forces and moments whatever the cone; a tilted shaft
+    carries the rotor's weight m g cos(tau) in plane and changes nothing else; a cone beyond
+    30 deg is refused by name."""
+    import dataclasses
+
+    tb = load_turbine(TOML)
+    U, psi = 9.0, 0.37
+    wind = Wind(mean_speed=U, hub_height=tb.hub_height, shear_exponent=0.0, tower_radius=0.0)
+    sheared = Wind(mean_speed=U, hub_height=tb.hub_height, shear_exponent=0.2,
+                   turbulence_intensity=0.1, duration=5.0, grid_points=4)
+    y, z, psib = tb.rotor.positions(psi)
+    vel = sheared.velocity(1.0, y, z + tb.hub_height)
+    u, vt = tb.blade_wind(sheared, 1.0, psi)
+    np.testing.assert_array_equal(u, vel[0])
+    np.testing.assert_array_equal(vt, -vel[1] * np.cos(psib)[:, None]
+                                  - vel[2] * np.sin(psib)[:, None])
+    tau, c = math.radians(5.0), math.radians(-4.0)
+    tilted = dataclasses.replace(tb, tilt_deg=5.0)
+    u, vt = tilted.blade_wind(wind, 0.0, psi)
+    np.testing.assert_allclose(u, U * math.cos(tau), rtol=1e-12)
+    np.testing.assert_allclose(vt, np.broadcast_to(-U * math.sin(tau) * np.sin(psib)[:, None],
+                                                   vt.shape), rtol=1e-12)
+    coned = dataclasses.replace(tb, rotor=dataclasses.replace(tb.rotor, precone=c))
+    u, vt = coned.blade_wind(wind, 0.0, psi)
+    np.testing.assert_allclose(u, U * math.cos(c), rtol=1e-12)
+    np.testing.assert_allclose(vt, 0.0, atol=1e-12)
+    om = 2.3
+    ld = coned.rotor.loads(om, psi, u, vt, reset=True)
+    weight = coned.rotor.mass * coned.rotor.gravity
+    scale = ld["thrust_N"]
+    assert scale > 0
+    for key, value in (("shear_y_N", 0.0), ("shear_z_N", -weight), ("tilt_Nm", 0.0),
+                       ("yaw_Nm", 0.0)):
+        assert abs(ld[key] - value) < 1e-9 * scale * (tb.rotor.radius if "Nm" in key else 1)
+    level = coned.rotor.loads(om, psi, u, vt, reset=True, tilt=tau)
+    assert level["shear_z_N"] - ld["shear_z_N"] == pytest.approx(weight * (1 - math.cos(tau)),
+                                                                 rel=1e-9)
+    assert {k: v for k, v in level.items() if k != "shear_z_N"} == \
+        {k: v for k, v in ld.items() if k != "shear_z_N"}
+    with pytest.raises(gm.ModelError, match=r"rotor\.precone = 0\.6 rad: must be a number in"):
+        dataclasses.replace(tb.rotor, precone=0.6)
+
+
 def test_turbulence_is_seeded_and_sampled():
     kw = dict(mean_speed=10.0, hub_height=40.0, turbulence_intensity=0.12, duration=20.0,
               dt=0.2, grid_points=4)

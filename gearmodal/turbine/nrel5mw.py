@@ -10,9 +10,9 @@ extra) reads it. Nothing is copied by hand: every number below comes from those 
 :func:`rotor` builds gearmodal's blade-element momentum rotor (:class:`~.rotor.Rotor`, the one
 the 600 kW turbine runs) on the 5 MW blade: AeroDyn's blade nodes between the root and the tip
 node are the element centres (the 17 stations of the definition report's Table 2-1; the root
-and tip nodes bound the elements), each with its chord, twist and polar. Precone and shaft tilt
-are left out (the rotor plane is normal to the wind); :func:`cp_table` reads NREL's table to
-compare with (``docs/guide/turbine.md`` gives the difference).
+and tip nodes bound the elements), each with its chord, twist and polar, the blades coned by the
+deck's precone; :func:`turbine` tilts the shaft by the deck's tilt. :func:`cp_table` and
+:func:`ct_table` read NREL's tables to compare with (``docs/guide/turbine.md``).
 """
 
 from __future__ import annotations
@@ -182,12 +182,24 @@ def rotor(deck: Deck | None = None) -> Rotor:
                  r=d.hub_radius + d.span[inner], chord=d.chord[inner], twist=d.twist[inner],
                  blades=d.blades, airfoils=list(d.airfoils), airfoil_id=d.airfoil_id[inner],
                  airfoil=d.airfoils[0], rho=d.air_density, correction="buhl",
-                 mass=d.rotor_mass)
+                 mass=d.rotor_mass, precone=d.precone)
 
 
 def cp_table(path=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """NREL's rotor performance table ``(pitch [rad], tip-speed ratio, Cp[tsr, pitch])`` from
-    ``Cp_Ct_Cq.NREL5MW.txt`` (default: the rosco wheel's)."""
+    ``Cp_Ct_Cq.NREL5MW.txt`` (default: the rosco wheel's). The ROSCO toolbox made it with
+    CCBlade at 11.4 m/s with the deck's precone and tilt, a shear exponent of 0.2 at
+    89.56 m (TowerHt + Twr2Shft) and 8 azimuth sectors (``rosco.toolbox.turbine``)."""
+    return _performance_table("Power coefficient", path)
+
+
+def ct_table(path=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """NREL's thrust coefficients ``(pitch [rad], tip-speed ratio, Ct[tsr, pitch])`` from the
+    same file as :func:`cp_table`."""
+    return _performance_table("Thrust coefficient", path)
+
+
+def _performance_table(title: str, path=None):
     path = Path(path) if path is not None else rosco_files()[1] / "Cp_Ct_Cq.NREL5MW.txt"
     lines = [ln.strip() for ln in path.read_text().splitlines()]
 
@@ -200,11 +212,22 @@ def cp_table(path=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
     pitch = np.radians(after("Pitch angle vector")[0])
     tsr = after("TSR vector")[0]
-    cp = after("Power coefficient", len(tsr))
-    if cp.shape != (len(tsr), len(pitch)):
-        raise ModelError("cp_table", f"{path.name}: Cp is {cp.shape}, not "
+    table = after(title, len(tsr))
+    if table.shape != (len(tsr), len(pitch)):
+        raise ModelError("cp_table", f"{path.name}: {title} is {table.shape}, not "
                          f"({len(tsr)}, {len(pitch)})")
-    return pitch, tsr, cp
+    return pitch, tsr, table
+
+
+#: NREL's table's conditions (:func:`cp_table`): shear exponent, its reference height (m)
+TABLE_SHEAR = (0.2, 89.56)
+
+
+def calm(turb: Turbine, wind_speed: float) -> Wind:
+    """Steady uniform ``wind_speed`` (m/s) at ``turb``'s hub: no shear, turbulence or tower."""
+    return Wind(mean_speed=float(wind_speed), hub_height=turb.hub_height,
+                shear_exponent=0.0, tower_radius=0.0)
+
 
 def drivetrain(deck: Deck | None = None):
     """The 5 MW drivetrain as a gearmodal model on the low-speed side: the rotor (hub and
@@ -223,14 +246,15 @@ def drivetrain(deck: Deck | None = None):
     return m
 
 
-def blade_pitch_for_torque(rot, wind_speed: float, omega: float, torque: float) -> float:
-    """The collective pitch (rad, 0 to 45 deg) at which the rotor's aerodynamic torque in
+def blade_pitch_for_torque(turb: Turbine, wind_speed: float, omega: float,
+                           torque: float) -> float:
+    """The collective pitch (rad, 0 to 45 deg) at which ``turb``'s aerodynamic torque in
     uniform ``wind_speed`` at ``omega`` is ``torque`` (bisection; 0 when even fine pitch
     gives less): a start near the controller's steady state."""
-    u = np.full((rot.blades, len(rot.r)), float(wind_speed))
+    wind = calm(turb, wind_speed)
 
     def q(p):
-        return rot.loads(omega, 0.0, u, np.zeros_like(u), reset=True, pitch=p)["torque_Nm"]
+        return turb.hub_loads(wind, 0.0, omega, 0.0, pitch=p, reset=True)["torque_Nm"]
 
     lo, hi = 0.0, math.radians(45.0)
     if q(lo) <= torque:
@@ -241,7 +265,7 @@ def blade_pitch_for_torque(rot, wind_speed: float, omega: float, torque: float) 
     return 0.5 * (lo + hi)
 
 
-def steady_start(deck: Deck, rot: Rotor, wind_speed: float) -> tuple[float, float, float]:
+def steady_start(deck: Deck, turb: Turbine, wind_speed: float) -> tuple[float, float, float]:
     """The controller's own steady state in uniform ``wind_speed`` (m/s): ``(rotor speed
     rad/s, pitch rad, generator torque N m)``: its DISCON.IN's optimal tip-speed ratio and
     region-2 gain below rated, its rated torque and the balancing pitch above."""
@@ -252,7 +276,7 @@ def steady_start(deck: Deck, rot: Rotor, wind_speed: float) -> tuple[float, floa
     pitch = 0.0
     if om0 >= w_rated:
         t_gen = discon_value("VS_RtTq", discon)
-        pitch = blade_pitch_for_torque(rot, wind_speed, om0, t_gen * deck.gear_ratio)
+        pitch = blade_pitch_for_torque(turb, wind_speed, om0, t_gen * deck.gear_ratio)
     return om0, pitch, t_gen
 
 
@@ -261,7 +285,8 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
     """The 5 MW turbine in steady uniform wind ``wind_speed`` (m/s) for ``t_end`` s, ROSCO
     (:class:`~.rosco.Rosco`, the deck's DISCON.IN) setting the generator torque and the
     collective pitch every ``dt`` (its sample time), the drivetrain a :class:`gearmodal.Stepper`
-    advanced with the aerodynamic torque of the BEM rotor (evaluated every ``aero_dt``, held).
+    advanced with the aerodynamic torque of the BEM rotor (evaluated every ``aero_dt``, held;
+    the coned rotor on the tilted shaft of :func:`turbine`, blade 1 up).
     Starts at the optimal tip-speed ratio's speed (at most rated) and the pitch that balances
     rated torque above rated. Returns the means over the last ``average`` s: rotor speed
     (rpm), pitch (deg), electrical power (kW: generator torque times speed times the
@@ -274,14 +299,14 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
         raise ModelError("t_end", f"= {t_end!r} s at dt = {dt!r} s: {t_end / dt:.3g} steps, "
                          "more than 1e8")
     d = read_deck() if deck is None else deck
-    rot = rotor(d)
+    tb = turbine(d)
     n, m_aero = round(t_end / dt), max(1, round(aero_dt / dt))
     if not (wind_speed > 0 and n > 0 and average < t_end):
         raise ModelError("wind_speed", f"= {wind_speed!r} m/s, t_end = {t_end!r} s: a wind "
                          "speed > 0 and a run longer than the averaging window")
-    om0, pitch, t_gen = steady_start(d, rot, wind_speed)
-    u = np.full((rot.blades, len(rot.r)), float(wind_speed))
-    q = rot.loads(om0, 0.0, u, np.zeros_like(u), reset=True, pitch=pitch)["torque_Nm"]
+    om0, pitch, t_gen = steady_start(d, tb, wind_speed)
+    wind = calm(tb, wind_speed)
+    q = tb.hub_loads(wind, 0.0, om0, 0.0, pitch=pitch, reset=True)["torque_Nm"]
     st = Stepper(drivetrain(d), dt=dt, speed_rpm=om0 * 30 / math.pi,
                  loads={"rotor.torque": q, "generator.torque": -t_gen * d.gear_ratio},
                  q0="equilibrium", reference="follow", rebase_dt=dt, record=False,
@@ -294,7 +319,7 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
             t = k * dt
             w_r, w_g = y["rotor.theta.velocity"], y["generator.theta.velocity"]
             if k % m_aero == 0:
-                q = rot.loads(w_r, 0.0, u, np.zeros_like(u), pitch=pitch)["torque_Nm"]
+                q = tb.hub_loads(wind, t, w_r, 0.0, pitch=pitch)["torque_Nm"]
             t_gen, pitch = ctrl.step(t, d.gear_ratio * w_g, w_r, pitch, t_gen, wind_speed)
             y = st.advance((k + 1) * dt, {"rotor.torque": q,
                                           "generator.torque": -t_gen * d.gear_ratio},
@@ -306,7 +331,8 @@ def controlled_run(wind_speed: float, t_end: float = 90.0, *, deck: Deck | None 
             "pitch_deg": math.degrees(p),
             "power_kW": p_gen * d.generator_efficiency / 1e3,
             "tsr": w_r * d.tip_radius / wind_speed,
-            "cp": p_aero / (0.5 * d.air_density * math.pi * d.tip_radius**2 * wind_speed**3)}
+            "cp": p_aero / (0.5 * d.air_density * math.pi * (d.tip_radius * math.cos(d.precone))**2
+                            * wind_speed**3)}
 
 
 
@@ -348,7 +374,7 @@ def simulate(wind: Wind, t_end: float, *, gearbox=None, deck: Deck | None = None
     if gearbox is None:
         gearbox = load(find("nrel5mw", "models"))
     tur = turbine(d)
-    om0, pitch, _ = steady_start(d, tur.rotor, wind.mean_speed)
+    om0, pitch, _ = steady_start(d, tur, wind.mean_speed)
     settings.setdefault("rotor_speed0_rpm", om0 * 30 / math.pi)
     with Rosco(d.path / "DISCON.IN", dt=aero_dt, pitch0=pitch,
                efficiency=d.generator_efficiency) as ctrl:

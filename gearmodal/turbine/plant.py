@@ -111,6 +111,7 @@ class TurbinePlant:
                              "turbine has no induction generator (Turbine.generator is None)")
         self.controller = controller
         self.pitch = float(controller.pitch) if controller is not None else turbine.rotor.pitch
+        self.tilt = math.radians(turbine.tilt_deg)  # the rotor's weight in the shaft's axes
         self._hub = (np.zeros(1), np.full(1, float(turbine.hub_height)))  # the hub point
         self.t_gen = 0.0  # the controller's last torque demand, N m
         self.on = bool(connected) or controller is not None
@@ -217,7 +218,8 @@ class TurbinePlant:
         tw = time.process_time()
         bw = self.turbine.blade_wind(self.wind, ta, psi)
         tv = time.process_time()
-        out = self.turbine.rotor.loads(om, psi, *bw, reset=reset, pitch=self.pitch)
+        out = self.turbine.rotor.loads(om, psi, *bw, reset=reset, pitch=self.pitch,
+                                       tilt=self.tilt)
         self.clock["wind_s"] += tv - tw
         self.clock["aero_s"] += time.process_time() - tv
         return out

@@ -21,11 +21,23 @@ Energy 17, 2014), found by secant and bracketed regula falsi steps next to the p
 update's angle; where no root is found there, the inductions are iterated (relaxed, to
 ``tol``) as a fallback. Forces per unit length ``0.5 rho W^2 c (Cn, Ct)``.
 
-Hub loads (nonrotating axes of :mod:`.wind`, at the rotor centre): thrust ``Fx``, driving torque
-``Q`` (about the shaft, positive in the direction of rotation), in-plane shear ``Fy``, ``Fz``
-(the rotor's weight included), tilt ``My`` and yaw ``Mz`` moments. Blade ``b`` is at azimuth
-``psi + 2 pi b / B`` (0 = up); its element at radius ``r`` sits at ``y = -r sin(psi_b)``,
-``z = r cos(psi_b)`` and moves along ``e_t = (0, -cos(psi_b), -sin(psi_b))``.
+Coned blades (``precone`` ``c``, ElastoDyn's sign: negative leans the blades upwind), as CCBlade
+(S. A. Ning, "CCBlade documentation", NREL 2013, sec. 2; the blade-element kinematics of AeroDyn):
+an element at span ``r`` (along the blade, from the rotor centre) turns on the radius
+``r cos(c)`` and sits ``r sin(c)`` downwind of the rotor centre; it takes the wind normal to its
+coned span, ``U = u_x cos(c) - u_r sin(c)`` (:meth:`Turbine.blade_wind`), turns at
+``Omega r cos(c)``, and its normal force acts along ``e_n = cos(c) e_x - sin(c) e_r``; the
+solidity and Prandtl's losses take the span ``r``.
+
+Hub loads (the shaft's nonrotating axes at the rotor centre: ``x`` along the shaft downwind,
+``z`` up normal to it; without shaft tilt the axes of :mod:`.wind`): thrust ``Fx``, driving
+torque ``Q`` (about the shaft, positive in the direction of rotation), in-plane shear ``Fy``,
+``Fz`` (with the rotor's weight, ``-m g cos(tilt)``), tilt ``My`` and yaw ``Mz`` moments, the
+sums ``F = sum f``, ``M = sum p x f`` over the elements' forces ``f = f_n e_n + f_t e_t`` at
+their positions ``p``. The thrust is aerodynamic: the weight's component along a tilted shaft,
+``m g sin(tilt)``, is left to the main bearing. Blade ``b`` is at azimuth ``psi + 2 pi b / B``
+(0 = up); its element sits at ``y = -r cos(c) sin(psi_b)``, ``z = r cos(c) cos(psi_b)`` and
+moves along ``e_t = (0, -cos(psi_b), -sin(psi_b))``.
 """
 
 from __future__ import annotations
@@ -42,6 +54,8 @@ from .airfoil import Airfoil
 LOAD_COLUMNS = ["thrust_N", "torque_Nm", "shear_y_N", "shear_z_N", "tilt_Nm", "yaw_Nm"]
 #: the high-induction corrections (:class:`Rotor`)
 CORRECTIONS = ("spera", "buhl")
+#: the largest precone a rotor takes (rad: 30 deg)
+MAX_CONE = math.radians(30.0)
 
 
 @dataclass
@@ -55,7 +69,9 @@ class Rotor:
     several sections. mass : kg (its weight acts on the hub). rho : air density, kg/m^3.
     correction : the high-induction correction, ``"spera"`` (Glauert's in Spera's form above
     a = 0.2, Hansen eq. 6.38: the 600 kW turbine's) or ``"buhl"`` (Buhl's above a = 0.4, as
-    AeroDyn and CCBlade: a rotor read from an OpenFAST deck).
+    AeroDyn and CCBlade: a rotor read from an OpenFAST deck). precone : rad, the blades' cone
+    angle out of the rotor plane (ElastoDyn's sign: negative leans them upwind; module
+    docstring); ``r``, ``radius`` and ``hub_radius`` are spans along the coned blade.
     """
 
     radius: float
@@ -74,6 +90,7 @@ class Rotor:
     gravity: float = 9.81
     tol: float = 1e-8
     max_iter: int = 200
+    precone: float = 0.0
 
     def __post_init__(self):
         self.r = np.asarray(self.r, dtype=float)
@@ -90,6 +107,13 @@ class Rotor:
                              f"{self.radius}) m")
         if np.any(np.diff(self.r) <= 0) or np.any(self.chord <= 0):
             raise ModelError("rotor.r", "radii must increase and chords be > 0")
+        if not (isinstance(self.precone, (int, float)) and abs(self.precone) <= MAX_CONE):
+            raise ModelError("rotor.precone", f"= {self.precone!r} rad: must be a number in "
+                             f"[-{MAX_CONE:.4f}, {MAX_CONE:.4f}] (30 deg)")
+        self.precone = float(self.precone)
+        #: each element's radius of rotation and downwind offset (module docstring)
+        self.r_turn = self.r * math.cos(self.precone)
+        self.r_axial = self.r * math.sin(self.precone)
         # the polars on one grid of angles, a row each, and each element's row: the union of
         # the polars' own angles, so that interpolating on it is each polar's own (exact)
         foils = list(self.airfoils) if self.airfoils else [self.airfoil]
@@ -120,59 +144,70 @@ class Rotor:
         return state
 
     def positions(self, psi: float):
-        """Element positions ``(y, z)`` relative to the hub, each (blades, n), and the
-        blade azimuths (read-only: the last azimuth's are kept, asked for twice a step)."""
+        """Element positions ``(y, z)`` in the rotor plane relative to the hub, each
+        (blades, n) (the downwind offsets are ``r_axial``), and the blade azimuths
+        (read-only: the last azimuth's are kept, asked for twice a step)."""
         last = self.__dict__.get("_pos")
         if last is not None and last[0] == psi:
             return last[1]
         psib = psi + 2 * math.pi * np.arange(self.blades) / self.blades
-        y = -np.sin(psib)[:, None] * self.r[None, :]
-        z = np.cos(psib)[:, None] * self.r[None, :]
+        y = -np.sin(psib)[:, None] * self.r_turn[None, :]
+        z = np.cos(psib)[:, None] * self.r_turn[None, :]
         for a in (y, z, psib):
             a.flags.writeable = False
         self._pos = (psi, (y, z, psib))
         return y, z, psib
 
     def loads(self, omega: float, psi: float, wind_u: np.ndarray, wind_vt: np.ndarray,
-              reset: bool = False, pitch: float | None = None) -> dict:
-        """Hub loads (``LOAD_COLUMNS``, SI) at rotor speed ``omega`` (rad/s) and azimuth
-        ``psi`` (rad) for the wind normal to the rotor ``wind_u`` and in plane along the
-        blade motion ``wind_vt`` (m/s, each (blades, n)); ``pitch``: the blades' pitch (rad;
-        default the rotor's)."""
+              reset: bool = False, pitch: float | None = None, tilt: float = 0.0) -> dict:
+        """Hub loads (``LOAD_COLUMNS``, SI; module docstring) at rotor speed ``omega`` (rad/s)
+        and azimuth ``psi`` (rad) for the wind normal to the coned blades ``wind_u`` and in
+        plane along the blade motion ``wind_vt`` (m/s, each (blades, n)); ``pitch``: the
+        blades' pitch (rad; default the rotor's); ``tilt``: the shaft's tilt (rad, the rotor
+        end up), which turns the rotor's weight in the shaft's axes."""
         a = np.zeros_like(wind_u) if reset else self._a
         ap = np.zeros_like(wind_u) if reset else self._ap
         pa, pcl, pcd, pid = self._polars
         fn, ft, a, ap = _bem(np.ascontiguousarray(wind_u, dtype=float),
                              np.ascontiguousarray(wind_vt, dtype=float), float(omega), self.r,
-                             self.chord,
+                             self.r_turn, self.chord,
                              self.twist + (self.pitch if pitch is None else float(pitch)),
                              self.dr, self.blades, self.radius, self.hub_radius, pa, pcl, pcd,
                              pid, a.copy(), ap.copy(), self.rho, self.tol, self.max_iter,
                              CORRECTIONS.index(self.correction))
         self._a, self._ap = a, ap
-        r = self.r[None, :]
         y, z, psib = self.positions(psi)
-        et_y = -np.cos(psib)[:, None]
-        et_z = -np.sin(psib)[:, None]
+        cc, sc = math.cos(self.precone), math.sin(self.precone)
+        sp, cp = np.sin(psib)[:, None], np.cos(psib)[:, None]
+        # f = fn (cos c e_x - sin c e_r) + ft e_t, e_r = (0, -sin, cos), e_t = (0, -cos, -sin)
+        fx = fn * cc
+        fy = fn * sc * sp - ft * cp
+        fz = -fn * sc * cp - ft * sp
+        x = np.broadcast_to(self.r_axial[None, :], fn.shape)
         return {
-            "thrust_N": float(fn.sum()),
-            "torque_Nm": float((ft * r).sum()),
-            "shear_y_N": float((ft * et_y).sum()),
-            "shear_z_N": float((ft * et_z).sum()) - self.mass * self.gravity,
-            "tilt_Nm": float((z * fn).sum()),
-            "yaw_Nm": float((-y * fn).sum()),
+            "thrust_N": float(fx.sum()),
+            "torque_Nm": float((y * fz - z * fy).sum()),
+            "shear_y_N": float(fy.sum()),
+            "shear_z_N": float(fz.sum()) - self.mass * self.gravity * math.cos(tilt),
+            "tilt_Nm": float((z * fx - x * fz).sum()),
+            "yaw_Nm": float((x * fy - y * fx).sum()),
         }
 
     def power_coefficient(self, wind_speed: float, omega: float,
                           pitch: float | None = None) -> tuple[float, float]:
-        """``(Cp, Ct)`` in uniform wind (no shear, turbulence or tower), at ``pitch`` (rad;
-        default the rotor's)."""
-        u = np.full((self.blades, len(self.r)), float(wind_speed))
+        """``(Cp, Ct)`` in uniform wind along the shaft (no shear, tilt, turbulence or tower),
+        at ``pitch`` (rad; default the rotor's), on the swept area ``pi (R cos(c))^2`` (as
+        CCBlade; :meth:`Turbine.power_coefficient` for the turbine's tilt and shear)."""
+        u = np.full((self.blades, len(self.r)), float(wind_speed) * math.cos(self.precone))
         ld = self.loads(omega, 0.0, u, np.zeros_like(u), reset=True, pitch=pitch)
-        area = math.pi * self.radius**2
-        p_wind = 0.5 * self.rho * area * wind_speed**3
-        return (ld["torque_Nm"] * omega / p_wind,
-                ld["thrust_N"] / (0.5 * self.rho * area * wind_speed**2))
+        return self.coefficients(ld, wind_speed, omega)
+
+    def coefficients(self, loads: dict, wind_speed: float, omega: float) -> tuple[float, float]:
+        """``(Cp, Ct)`` of hub ``loads`` at ``wind_speed`` (m/s) and rotor speed ``omega``
+        (rad/s) on the swept area ``pi (R cos(c))^2``."""
+        area = math.pi * (self.radius * math.cos(self.precone))**2
+        q = 0.5 * self.rho * area * wind_speed**2
+        return loads["torque_Nm"] * omega / (q * wind_speed), loads["thrust_N"] / q
 
 
 @numba.njit(cache=True)
@@ -289,32 +324,34 @@ def _solve_phi(phi0, u, wr, vt, theta, sigma, B, R, ri, rh, pa, pcl, pcd, corr=0
 
 
 @numba.njit(cache=True)
-def _bem(U, vt, omega, r, chord, theta, dr, B, R, rh, pa, PCL, PCD, pid, a, ap, rho, tol,
+def _bem(U, vt, omega, r, rt, chord, theta, dr, B, R, rh, pa, PCL, PCD, pid, a, ap, rho, tol,
          max_iter, corr=0):
     """Element-by-element BEM solution (module docstring); returns per element the normal and
     tangential forces (N, over the element's width) and the inductions. Each element's flow
     angle is the root of the one-equation residual (:func:`_solve_phi`) next to the previous
     update's; where none is found, the inductions are iterated (relaxed) as before. The polars
-    are rows of ``PCL``, ``PCD`` on the angles ``pa``, element ``i``'s the row ``pid[i]``."""
+    are rows of ``PCL``, ``PCD`` on the angles ``pa``, element ``i``'s the row ``pid[i]``.
+    ``r``: the elements' spans (solidity, losses); ``rt``: their radii of rotation."""
     nb, n = U.shape
     fn = np.empty((nb, n))
     ft = np.empty((nb, n))
     for b in range(nb):
         for i in range(n):
             ri = r[i]
+            wr = omega * rt[i]
             pcl, pcd = PCL[pid[i]], PCD[pid[i]]
             sigma = B * chord[i] / (2.0 * math.pi * ri)
             u = max(U[b, i], 1e-3)
             ai, api = a[b, i], ap[b, i]
-            phi0 = math.atan2(u * (1.0 - ai), omega * ri * (1.0 + api) - vt[b, i])
-            phi = _solve_phi(phi0, u, omega * ri, vt[b, i], theta[i], sigma, B, R, ri, rh,
+            phi0 = math.atan2(u * (1.0 - ai), wr * (1.0 + api) - vt[b, i])
+            phi = _solve_phi(phi0, u, wr, vt[b, i], theta[i], sigma, B, R, ri, rh,
                              pa, pcl, pcd, corr)
             if math.isfinite(phi):
                 ai, api = _inductions(phi, theta[i], sigma, B, R, ri, rh, pa, pcl, pcd, corr)
             else:
                 for _ in range(max_iter):
                     ux = u * (1.0 - ai)
-                    ut = omega * ri * (1.0 + api) - vt[b, i]
+                    ut = wr * (1.0 + api) - vt[b, i]
                     an, apn = _inductions(math.atan2(ux, ut), theta[i], sigma, B, R, ri, rh,
                                           pa, pcl, pcd, corr)
                     change = max(abs(an - ai), abs(apn - api))
@@ -324,7 +361,7 @@ def _bem(U, vt, omega, r, chord, theta, dr, B, R, rh, pa, PCL, PCD, pid, a, ap, 
                         break
             a[b, i], ap[b, i] = ai, api
             ux = u * (1.0 - ai)
-            ut = omega * ri * (1.0 + api) - vt[b, i]
+            ut = wr * (1.0 + api) - vt[b, i]
             phi = math.atan2(ux, ut)
             al = (phi - theta[i] + math.pi) % (2.0 * math.pi) - math.pi
             cl, cd = _polar(al, pa, pcl, pcd)

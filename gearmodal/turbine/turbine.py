@@ -87,12 +87,56 @@ class Turbine:
 
     def blade_wind(self, wind: Wind, t: float, psi: float):
         """Wind at the blade elements at time ``t`` (s) and blade-1 azimuth ``psi`` (rad):
-        ``(u, vt)``, normal to the rotor and in plane along the blade motion, m/s, each
-        (blades, n), for :meth:`Rotor.loads`."""
-        y, z, psib = self.rotor.positions(psi)
-        vel = wind.velocity(t, y, z + self.hub_height)
-        vt = -vel[1] * np.cos(psib)[:, None] - vel[2] * np.sin(psib)[:, None]
-        return vel[0], vt
+        ``(u, vt)``, normal to the coned blades and in plane along the blade motion, m/s,
+        each (blades, n), for :meth:`Rotor.loads` (:mod:`.rotor`'s docstring). The shaft,
+        tilted by ``tilt_deg`` (the rotor end up), has the axis ``x_s = (cos, 0, -sin)`` and
+        the normal ``z_s = (sin, 0, cos)`` in the wind's axes; an element at ``(x, y, z)`` in
+        the shaft's axes stands ``z cos(tilt) - x sin(tilt)`` above the hub."""
+        rot = self.rotor
+        y, z, psib = rot.positions(psi)
+        tau = math.radians(self.tilt_deg)
+        ct, st = math.cos(tau), math.sin(tau)
+        height = z + self.hub_height if tau == 0.0 else \
+            self.hub_height + z * ct - rot.r_axial[None, :] * st
+        vel = wind.velocity(t, y, height)
+        sp, cp = np.sin(psib)[:, None], np.cos(psib)[:, None]
+        if tau == 0.0:
+            ux, uz = vel[0], vel[2]
+        else:
+            ux, uz = vel[0] * ct - vel[2] * st, vel[0] * st + vel[2] * ct
+        vt = -vel[1] * cp - uz * sp
+        if rot.precone == 0.0:
+            return ux, vt
+        ur = -vel[1] * sp + uz * cp  # along the blade's radial direction e_r
+        return ux * math.cos(rot.precone) - ur * math.sin(rot.precone), vt
+
+    def hub_loads(self, wind: Wind, t: float, omega: float, psi: float, *,
+                  pitch: float | None = None, reset: bool = False) -> dict:
+        """The rotor's hub loads (:meth:`Rotor.loads`) in ``wind`` at time ``t`` (s), rotor
+        speed ``omega`` (rad/s) and blade-1 azimuth ``psi`` (rad), the shaft tilted by
+        ``tilt_deg``."""
+        return self.rotor.loads(omega, psi, *self.blade_wind(wind, t, psi), reset=reset,
+                                pitch=pitch, tilt=math.radians(self.tilt_deg))
+
+    def power_coefficient(self, wind: Wind, omega: float, pitch: float | None = None, *,
+                          azimuths: int = 8) -> tuple[float, float]:
+        """``(Cp, Ct)`` in a steady ``wind`` (its shear, no turbulence; tower shadow as the
+        wind has it) at rotor speed ``omega`` (rad/s) and ``pitch`` (rad): the loads averaged
+        over ``azimuths`` rotor positions evenly spread over one blade passage, relative to
+        the wind's hub speed on the swept area ``pi (R cos(precone))^2`` (as CCBlade, whose
+        ``nSector`` averages the same way)."""
+        if wind.turbulent:
+            raise ModelError("wind.turbulence_intensity", f"= {wind.turbulence_intensity}: "
+                             "the power coefficient needs a steady wind")
+        if not (isinstance(azimuths, int) and 1 <= azimuths <= 360):
+            raise ModelError("azimuths", f"= {azimuths!r}: an integer in [1, 360]")
+        step = 2 * math.pi / self.rotor.blades / azimuths
+        sums = {"torque_Nm": 0.0, "thrust_N": 0.0}
+        for k in range(azimuths):
+            ld = self.hub_loads(wind, 0.0, omega, k * step, pitch=pitch, reset=True)
+            for key in sums:
+                sums[key] += ld[key] / azimuths
+        return self.rotor.coefficients(sums, wind.mean_speed, omega)
 
     def rear_force(self, ld: dict) -> tuple[float, float]:
         """``(y, z)`` force of the shaft end on the gearbox, N (module docstring)."""
@@ -359,7 +403,7 @@ def simulate_turbine(turbine: Turbine, wind: Wind, t_end: float, *, dt: float = 
     rows = []
 
     def aero(t, om, ps, reset=False):
-        return rot.loads(om, ps, *turbine.blade_wind(wind, t, ps), reset=reset)
+        return turbine.hub_loads(wind, t, om, ps, reset=reset)
 
     def gen_torque(om):
         return gen.torque(om * ratio) if on else 0.0
