@@ -364,7 +364,7 @@ def cmd_docs_figures(args) -> int:
     from .figures import check_out, docs_figures
 
     out = check_out(args.out)
-    written = docs_figures(out, quick=args.quick, work=args.work,
+    written = docs_figures(out, quick=args.quick, work=args.work, jobs=args.jobs,
                            progress=None if args.quiet else
                            lambda name, s: print(f"  {name}: {s:.1f} s", flush=True))
     print(f"wrote {len(written)} figures into {out}")
@@ -507,10 +507,12 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("docs-figures", help="write every figure of the documentation "
                        "(docs/ in the source tree), each by the command a user would run")
     d.add_argument("--out", required=True, type=_out_folder, help="output folder (docs)")
-    d.add_argument("--quick", action="store_true", help="short runs and coarse grids (a "
-                   "minute; checks that every figure is still written, not for docs/)")
+    d.add_argument("--quick", action="store_true", help="short runs and coarse grids "
+                   "(checks that every figure is still written, not for docs/)")
     d.add_argument("--work", type=_out_folder, help="folder for the commands' own outputs "
                    "(default: a temporary one; given, a rerun resumes the studies)")
+    d.add_argument("--jobs", type=int, default=1, metavar="N",
+                   help="run N of the figures' commands at once (default 1)")
     d.add_argument("--quiet", action="store_true", help="no progress lines")
     d.set_defaults(func=cmd_docs_figures)
     f = sub.add_parser("fmu", help="the model as an FMI 2.0 co-simulation FMU (the fmu "

@@ -119,13 +119,17 @@ def mode_shapes(out: Path, frames: int = 16) -> list[Path]:
     return written
 
 
-def docs_figures(out, *, quick: bool = False, work=None, progress=None) -> list[Path]:
+def docs_figures(out, *, quick: bool = False, work=None, progress=None,
+                 jobs: int = 1) -> list[Path]:
     """Write every documentation figure (:data:`FIGURES`, :data:`MODE_SHAPES`) into ``out``
     (the source tree's ``docs/`` for the real ones). ``quick``: short runs and coarse grids,
     for checking that every command still writes its figure. ``work``: the folder the
     commands write into (default: a temporary one; given, a rerun resumes the studies from
-    their stores). ``progress(name, seconds)`` is called after each figure. Returns the paths
-    written."""
+    their stores). ``progress(name, seconds)`` is called after each figure (the seconds of
+    the command that wrote it). ``jobs``: how many of the commands run at once (each in its
+    own process). Returns the paths written, in :data:`FIGURES` order."""
+    if not (isinstance(jobs, int) and not isinstance(jobs, bool) and 1 <= jobs <= 64):
+        raise ModelError("jobs", f"= {jobs!r}: an integer in [1, 64]")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tmp = None
@@ -136,24 +140,26 @@ def docs_figures(out, *, quick: bool = False, work=None, progress=None) -> list[
     work.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     try:
-        done: dict[tuple[str, ...], Path] = {}
+        # one run writes several figures (the Campbell pair): each command once
+        runs: dict[tuple[str, ...], Path] = {}
         for fig in FIGURES:
-            t0 = time.perf_counter()
             argv = [*fig.args, *(fig.quick if quick else ())]
-            key = tuple(argv)
-            if key not in done:  # one run writes several figures (the Campbell pair)
-                folder = work / "_".join(a.strip("-").replace(":", "-") for a in argv)
-                _run([*argv, "--out", str(folder), "--quiet"], work / f"{folder.name}.log")
-                done[key] = folder
-            src = done[key] / fig.writes
+            runs.setdefault(tuple(argv), work / "_".join(a.strip("-").replace(":", "-")
+                                                         for a in argv))
+        seconds = _run_all(runs, work, jobs)
+        reported: set[tuple[str, ...]] = set()
+        for fig in FIGURES:
+            key = tuple([*fig.args, *(fig.quick if quick else ())])
+            src = runs[key] / fig.writes
             if not src.is_file():
-                raise RuntimeError(f"gearmodal {' '.join(argv)} did not write {fig.writes}")
+                raise RuntimeError(f"gearmodal {' '.join(key)} did not write {fig.writes}")
             shutil.copyfile(src, out / fig.name)
             written.append(out / fig.name)
             if progress:
-                progress(fig.name, time.perf_counter() - t0)
+                progress(fig.name, 0.0 if key in reported else seconds[key])
+            reported.add(key)
         t0 = time.perf_counter()
-        campbell_dir = done[tuple([*FIGURES[0].args, *(FIGURES[0].quick if quick else ())])]
+        campbell_dir = runs[tuple([*FIGURES[0].args, *(FIGURES[0].quick if quick else ())])]
         written.append(interactive_campbell(campbell_dir, out / INTERACTIVE))
         if progress:
             progress(INTERACTIVE, time.perf_counter() - t0)
@@ -165,6 +171,27 @@ def docs_figures(out, *, quick: bool = False, work=None, progress=None) -> list[
         if tmp is not None:
             tmp.cleanup()
     return written
+
+
+def _run_all(runs: dict[tuple[str, ...], Path], work: Path, jobs: int) -> dict:
+    """Run each command of ``runs`` (argv -> its output folder), ``jobs`` at a time; the
+    seconds each took. The first failure stops the commands not yet started and is raised."""
+    def one(argv: tuple[str, ...]) -> float:
+        t0 = time.perf_counter()
+        folder = runs[argv]
+        _run([*argv, "--out", str(folder), "--quiet"], work / f"{folder.name}.log")
+        return time.perf_counter() - t0
+
+    if jobs == 1:
+        return {argv: one(argv) for argv in runs}
+    from concurrent.futures import ThreadPoolExecutor
+
+    ex = ThreadPoolExecutor(max_workers=jobs)
+    try:
+        futures = {argv: ex.submit(one, argv) for argv in runs}
+        return {argv: f.result() for argv, f in futures.items()}
+    finally:
+        ex.shutdown(wait=True, cancel_futures=True)
 
 
 def check_out(out) -> Path:

@@ -17,10 +17,10 @@ taken; the instance then takes only getters, ``fmi2Terminate``, ``fmi2Reset`` an
 ``fmi2FreeInstance``, FMI's *stepFailed*), and every other call returns ``fmi2Fatal`` (its
 loader turns a Python exception into that status; there is no path to ``fmi2Error``).
 
-**Time.** FMI's first ``fmi2DoStep`` starts at the experiment's start time (pythonfmu 0.7 does
-not pass ``fmi2SetupExperiment``'s times to Python): the gearbox's time 0 is that point, any
-start time gives the same run, and every later call must start where the last one ended (to
-1e-9 of the time, the host's accumulated rounding) or it is refused.
+**Time.** FMI's first ``fmi2DoStep`` starts at the experiment's start time (pythonfmu 0.7
+passes ``fmi2SetupExperiment``'s start time to Python, not its stop time): the gearbox's time 0
+is that point, any start time gives the same run, and every later call must start where the
+last one ended (to 1e-9 of the time, the host's accumulated rounding) or it is refused.
 """
 
 from __future__ import annotations

@@ -85,3 +85,36 @@ def test_torsional_levels_give_the_same_rows_at_every_azimuth():
     assert geo.exact
     for psi in (0.0, 1.1, 3.49):
         _close(geo.assemble(psi), m.assemble(azimuth=psi))
+
+
+def test_a_model_fitted_before_is_not_fitted_again():
+    """A second AzimuthAssembler of an equal model (the same file loaded again) takes the
+    process's kept fit: no assembly is made, and every array at any azimuth is the first fit's
+    bit for bit. A changed model is fitted anew, and changing one assembler's arrays leaves
+    the kept fit as it was."""
+    from gearmodal.integrate import azimuth
+
+    azimuth._FITS.clear()
+    first = AzimuthAssembler(gm.load("studies/models/600kw.toml"))
+    again = gm.load("studies/models/600kw.toml")
+    calls = []
+    plain = again.assemble
+    again.assemble = lambda **kw: calls.append(kw) or plain(**kw)
+    second = AzimuthAssembler(again)
+    assert calls == [] and second.model is again and second.exact == first.exact
+    for psi in (0.0, 0.7, 2.9):
+        a, b = first._values(psi), second._values(psi)
+        assert a.keys() == b.keys()
+        for key in a:
+            np.testing.assert_array_equal(a[key], b[key])
+    key = next(k for k in second.coef if k not in second.constant)
+    second.coef[key][0][...] = 0.0
+    third = AzimuthAssembler(gm.load("studies/models/600kw.toml"))
+    np.testing.assert_array_equal(third.coef[key][0], first.coef[key][0])
+    stiffer = gm.load("studies/models/600kw.toml")
+    bearing = next(iter(stiffer.bearings.values()))
+    for k in bearing.stiffness:
+        bearing.stiffness[k] *= 2.0
+    n = len(azimuth._FITS)
+    AzimuthAssembler(stiffer)
+    assert len(azimuth._FITS) == n + 1
