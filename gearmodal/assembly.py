@@ -528,9 +528,9 @@ class Contributions:
         if not np.any(H6):
             return None
         bodies = list(dict.fromkeys(b.name for b, _ in blocks))
-        idx = np.concatenate([np.arange(self.n)[self.slices[b]] for b in bodies])
-        start = dict(zip(bodies, np.cumsum([0] + [len(np.arange(self.n)[self.slices[b]])
-                                                 for b in bodies]), strict=False))
+        ranges = [range(self.n)[self.slices[b]] for b in bodies]
+        idx = np.concatenate([np.arange(r.start, r.stop, r.step) for r in ranges])
+        start = dict(zip(bodies, np.cumsum([0] + [len(r) for r in ranges]), strict=False))
         T = np.zeros((H6.shape[0], len(idx)))
         row = 0
         for body, rows in blocks:

@@ -152,7 +152,9 @@ class Bearing(Element):
             + (list(range(12, 15)) if x is not None else [])
         parts = [(a, slice(0, 6))] + ([(b, slice(0, 6))] if b is not None else []) \
             + ([(x, slice(3, 6))] if x is not None else [])
-        return lambda i: (parts, H[i][np.ix_(keep, keep)])
+        if len(keep) != 15:  # the Hessians on the parts present (one index grid for all)
+            H = H[(slice(None), *np.ix_(keep, keep))]
+        return lambda i: (parts, H[i])
 
     def _rows(self, ctx, azimuth: float):
         """``(spring_row(i), gap_row(j))`` at ``azimuth``: the joint deflection ``g_i`` of
