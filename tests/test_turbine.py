@@ -144,6 +144,38 @@ def test_a_coned_rotor_on_a_tilted_shaft():
         dataclasses.replace(tb.rotor, precone=0.6)
 
 
+def test_a_run_in_openfasts_channels_and_units():
+    """``TurbineResult.openfast``: OpenFAST's channel names, each with its unit in
+    ``attrs["units"]`` and the value converted to it (rpm, deg, kN-m, kW, N, N-m); GenSpeed
+    the rotor's times the gear ratio; GenPwr the shaft power times the efficiency (the
+    electrical power, as ServoDyn's GenEff makes it). The loads frame names its units too,
+    and a bad gear ratio or efficiency is refused by name."""
+    tb = load_turbine(TOML)
+    run = simulate_turbine(tb, Wind(mean_speed=10.0, tower_radius=0.0), 0.5,
+                           rotor_speed0_rpm=27.0, connected=True)
+    frame = run.to_frame()
+    assert frame.attrs["units"]["power_W"] == "W"
+    assert set(frame.attrs["units"]) == set(frame.columns)
+    of = run.openfast(gear_ratio=tb.gear_ratio, efficiency=0.95)
+    assert list(of.columns) == ["RotSpeed", "Azimuth", "BldPitch1", "GenTq", "RtAeroFxh",
+                                "RtAeroMxh", "GenSpeed", "GenPwr"]
+    assert of.index.name == "Time" and of.attrs["units"] == {
+        "Time": "s", "RotSpeed": "rpm", "Azimuth": "deg", "BldPitch1": "deg", "GenTq": "kN-m",
+        "RtAeroFxh": "N", "RtAeroMxh": "N-m", "GenSpeed": "rpm", "GenPwr": "kW"}
+    d = run.loads
+    np.testing.assert_array_equal(of.index.to_numpy(), d.index.to_numpy())
+    np.testing.assert_array_equal(of.RotSpeed, d.rotor_speed_rpm)
+    np.testing.assert_allclose(of.GenSpeed, d.rotor_speed_rpm * tb.gear_ratio, rtol=1e-15)
+    np.testing.assert_allclose(of.GenTq, d.generator_torque_Nm / 1e3, rtol=1e-15)
+    np.testing.assert_allclose(of.GenPwr, d.power_W * 0.95 / 1e3, rtol=1e-15)
+    np.testing.assert_array_equal(of.RtAeroMxh, d.torque_Nm)
+    assert of.GenPwr.iloc[-1] > 100.0  # kW: the generator connected and producing
+    for kw, name in (({"gear_ratio": 0.0}, "gear_ratio"), ({"gear_ratio": 50.0,
+                                                           "efficiency": 1.2}, "efficiency")):
+        with pytest.raises(gm.ModelError, match=rf"^{name} = "):
+            run.openfast(**kw)
+
+
 def test_turbulence_is_seeded_and_sampled():
     kw = dict(mean_speed=10.0, hub_height=40.0, turbulence_intensity=0.12, duration=20.0,
               dt=0.2, grid_points=4)

@@ -122,8 +122,8 @@ class DrivetrainResult:
         return None
 
     def to_frame(self) -> pd.DataFrame:
-        """The turbine loads at the aerodynamic rate."""
-        return self.turbine.loads
+        """The turbine loads at the aerodynamic rate, their units in ``attrs["units"]``."""
+        return self.turbine.to_frame()
 
     def plot(self):
         """Rotor speed, power and the planet-1 tooth forces against time; returns the Figure."""
@@ -134,7 +134,7 @@ class DrivetrainResult:
         axs[0].plot(d.index, d["rotor_speed_rpm"])
         axs[0].set_ylabel("rotor speed [rpm]")
         axs[1].plot(d.index, d["power_W"] / 1e3)
-        axs[1].set_ylabel("electrical power [kW]")
+        axs[1].set_ylabel("generator shaft power [kW]")
         self.gearbox.plot(ax=axs[2])
         mark_cut_in(axs, self.cut_in_time)
         fig.tight_layout()

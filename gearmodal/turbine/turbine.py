@@ -53,6 +53,23 @@ RPM = math.pi / 30
 TURBINE_COLUMNS = ["time", "rotor_speed_rpm", "azimuth_deg", "generator_connected",
                    "generator_torque_Nm", "power_W", *LOAD_COLUMNS, "rear_force_y_N",
                    "rear_force_z_N", "pitch_deg"]
+#: the unit of each turbine loads column (``power_W``: the generator shaft's power, torque
+#: times speed, before the generator's losses)
+TURBINE_UNITS = {"time": "s", "rotor_speed_rpm": "rpm", "azimuth_deg": "deg",
+                 "generator_connected": "-", "generator_torque_Nm": "N m", "power_W": "W",
+                 "thrust_N": "N", "torque_Nm": "N m", "shear_y_N": "N", "shear_z_N": "N",
+                 "tilt_Nm": "N m", "yaw_Nm": "N m", "rear_force_y_N": "N",
+                 "rear_force_z_N": "N", "pitch_deg": "deg"}
+#: OpenFAST's names and units of the turbine channels (ElastoDyn, ServoDyn, AeroDyn output
+#: lists): name -> (unit, the gearmodal column, its factor) for :meth:`TurbineResult.openfast`
+OPENFAST_CHANNELS = {
+    "RotSpeed": ("rpm", "rotor_speed_rpm", 1.0),
+    "Azimuth": ("deg", "azimuth_deg", 1.0),
+    "BldPitch1": ("deg", "pitch_deg", 1.0),
+    "GenTq": ("kN-m", "generator_torque_Nm", 1e-3),
+    "RtAeroFxh": ("N", "thrust_N", 1.0),
+    "RtAeroMxh": ("N-m", "torque_Nm", 1.0),
+}
 
 
 @dataclass
@@ -259,7 +276,8 @@ def _turbine(d: dict, default_name: str) -> Turbine:
 class TurbineResult:
     """Time series of a turbine run: ``loads`` DataFrame indexed by time (s) with
     ``rotor_speed_rpm``, ``azimuth_deg`` (blade 1), ``generator_connected``,
-    ``generator_torque_Nm`` (on the generator shaft), ``power_W``, the hub loads
+    ``generator_torque_Nm`` (on the generator shaft), ``power_W`` (the generator shaft's:
+    torque times speed, before the generator's losses), the hub loads
     ``thrust_N, torque_Nm, shear_y_N, shear_z_N, tilt_Nm, yaw_Nm`` and the shaft-end force on
     the gearbox ``rear_force_y_N, rear_force_z_N``."""
 
@@ -276,7 +294,36 @@ class TurbineResult:
             raise TypeError("TurbineResult needs loads (or stored=DIR)")
 
     def to_frame(self) -> pd.DataFrame:
-        return self.loads
+        """The loads table, its units in ``attrs["units"]`` (:data:`TURBINE_UNITS`)."""
+        frame = self.loads
+        frame.attrs["units"] = {c: TURBINE_UNITS[c] for c in frame.columns
+                                if c in TURBINE_UNITS}
+        return frame
+
+    def openfast(self, gear_ratio: float, efficiency: float = 1.0) -> pd.DataFrame:
+        """The run in OpenFAST's channel names and units, column for column with an
+        OpenFAST output (``attrs["units"]``): ``RotSpeed`` rpm, ``Azimuth`` deg,
+        ``BldPitch1`` deg, ``GenSpeed`` rpm (the rotor's times ``gear_ratio``), ``GenTq``
+        kN-m (on the generator shaft), ``GenPwr`` kW (electrical: the shaft power times
+        ``efficiency``, ServoDyn's ``GenEff``), ``RtAeroFxh`` N and ``RtAeroMxh`` N-m (the
+        rotor's aerodynamic thrust and torque, AeroDyn's). Indexed by ``Time`` (s). Not
+        offered: ``LSShftTq`` (the shaft's structural torque; a coupled run's gearbox gives
+        the shaft element's force)."""
+        for name, v, lo, hi in (("gear_ratio", gear_ratio, 0.0, 1e4),
+                                ("efficiency", efficiency, 0.0, 1.0)):
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and lo < v <= hi):
+                raise ModelError(name, f"= {v!r}: a number in ({lo:g}, {hi:g}]")
+        d = self.view(list(TURBINE_UNITS)[1:], max_rows=None)
+        out = pd.DataFrame(index=pd.Index(d.index.to_numpy(), name="Time"))
+        units = {}
+        for name, (unit, col, factor) in OPENFAST_CHANNELS.items():
+            out[name] = d[col].to_numpy() * factor
+            units[name] = unit
+        out["GenSpeed"] = d["rotor_speed_rpm"].to_numpy() * float(gear_ratio)
+        out["GenPwr"] = d["power_W"].to_numpy() * float(efficiency) * 1e-3
+        units.update(GenSpeed="rpm", GenPwr="kW")
+        out.attrs["units"] = {"Time": "s", **units}
+        return out
 
     def view(self, columns: list[str], max_rows: int | None = VIEW_ROWS) -> pd.DataFrame:
         """``columns`` of :attr:`loads` for a figure (a stored run's read decimated, every
@@ -295,7 +342,7 @@ class TurbineResult:
                        "rear_force_z_N"])
         axs[0].plot(d.index, d["rotor_speed_rpm"])
         axs[0].set_ylabel("rotor speed [rpm]")
-        axs[1].plot(d.index, d["power_W"] / 1e3, label="electrical")
+        axs[1].plot(d.index, d["power_W"] / 1e3, label="generator shaft")
         axs[1].plot(d.index, d["torque_Nm"] * d["rotor_speed_rpm"] * RPM / 1e3, lw=0.7,
                     label="aerodynamic")
         axs[1].set_ylabel("power [kW]")
