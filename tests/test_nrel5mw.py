@@ -139,10 +139,10 @@ def _operating_points(deck) -> list[tuple[int, int]]:
 def _table_conditions(deck, rot=None):
     """The 5 MW turbine (its rotor, or ``rot``) and the wind NREL's table was made in:
     11.4 m/s, shear exponent 0.2 at 89.56 m (:data:`nrel5mw.TABLE_SHEAR`)."""
-    tb = nrel5mw.turbine(deck)
+    alpha, height = nrel5mw.TABLE_SHEAR
+    tb = dataclasses.replace(nrel5mw.turbine(deck), hub_height=height)  # CCBlade's hub there
     if rot is not None:
         tb = dataclasses.replace(tb, rotor=rot)
-    alpha, height = nrel5mw.TABLE_SHEAR
     return tb, Wind(mean_speed=11.4, hub_height=height, shear_exponent=alpha,
                     tower_radius=0.0)
 
@@ -176,21 +176,21 @@ def _ccblade_polars(rot):
 
 def test_cp_and_ct_against_nrels_table(deck):
     """Against NREL's Cp and Ct tables (the ROSCO toolbox's CCBlade run: the deck's 2.5 deg
-    precone and 5 deg shaft tilt, shear 0.2, 8 azimuth sectors), at the 18 grid points of
-    the steady operation from 4 to 25 m/s, in the table's wind. With the polars smoothed
-    as CCBlade smooths them, Cp and Ct lie within 2 % of the table everywhere (measured
-    1.5 % and 1.3 %). With the deck's own polars, linearly interpolated as AeroDyn's
-    default (gearmodal's rotor), Ct stays within 2 % (1.6 %) and Cp within 3 % (2.5 %,
-    higher than the table at the optimal tip-speed ratio: CCBlade's smoothing shaves the
-    polars' lift-to-drag peak, which the smoothed run shows is the whole of it)."""
+    precone and 5 deg shaft tilt, shear 0.2 about a hub at 89.56 m, 8 azimuth sectors), at
+    the 15 grid points of the steady operation from 4 to 25 m/s, in the table's wind. With
+    the polars smoothed as CCBlade smooths them, Cp and Ct lie within 2 % of the table
+    everywhere (measured 1.8 % and 1.1 %). With the deck's own polars, linearly interpolated
+    as AeroDyn's default (gearmodal's rotor), Ct stays within 2 % (1.3 %) and Cp within 3 %
+    (2.0 %, the largest at fine pitch, where CCBlade's smoothing shaves the polars'
+    lift-to-drag peak: the smoothed run is 1.1 % there)."""
     smoothed = _against_table(deck, _ccblade_polars(nrel5mw.rotor(deck)))
-    assert len(smoothed) >= 15
-    assert np.abs(smoothed).max(axis=0) == pytest.approx([0.015, 0.013], abs=0.004)
+    assert len(smoothed) == 15
+    assert np.abs(smoothed).max(axis=0) == pytest.approx([0.018, 0.011], abs=0.003)
     assert np.abs(smoothed).max() < 0.02
     linear = _against_table(deck)
     assert np.abs(linear[:, 1]).max() < 0.02
     assert np.abs(linear[:, 0]).max() < 0.03
-    assert linear[:, 0].max() > smoothed[:, 0].max()
+    assert linear[:, 0].max() > smoothed[:, 0].max() + 0.005
 
 
 def test_the_rotors_elements_give_the_converged_bem(deck):

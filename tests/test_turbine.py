@@ -142,6 +142,41 @@ def test_a_coned_rotor_on_a_tilted_shaft():
         {k: v for k, v in ld.items() if k != "shear_z_N"}
     with pytest.raises(gm.ModelError, match=r"rotor\.precone = 0\.6 rad: must be a number in"):
         dataclasses.replace(tb.rotor, precone=0.6)
+    # the tilt's in-plane wind meets the descending blades (the -y side) head on: more thrust
+    # there, a positive yaw moment; none without tilt
+    ld0 = tb.hub_loads(wind, 0.0, om, 0.0, reset=True)
+    ld1 = tilted.hub_loads(wind, 0.0, om, 0.0, reset=True)
+    assert abs(ld0["yaw_Nm"]) < 1e-9 * ld0["thrust_N"] * tb.rotor.radius
+    assert ld1["yaw_Nm"] > 1e-3 * ld1["thrust_N"] * tb.rotor.radius
+    # the plane rotor's loads are the element forces' plain sums, bit for bit
+    from gearmodal.turbine import rotor as rotor_mod
+
+    rot = tb.rotor
+    u, vt = tb.blade_wind(sheared, 1.0, psi)
+    pa, pcl, pcd, pid = rot._polars
+    n = u.shape
+    fn, ft, _, _ = rotor_mod._bem(u, vt, om, rot.r, rot.r_turn, rot.chord, rot.twist + rot.pitch,
+                                  rot.dr, rot.blades, rot.radius, rot.hub_radius, pa, pcl, pcd,
+                                  pid, np.zeros(n), np.zeros(n), rot.rho, rot.tol, rot.max_iter,
+                                  rotor_mod.CORRECTIONS.index(rot.correction))
+    got = rot.loads(om, psi, u, vt, reset=True)
+    yy, zz, pb = rot.positions(psi)
+    assert got["thrust_N"] == float(fn.sum())
+    assert got["torque_Nm"] == float((ft * rot.r[None, :]).sum())
+    assert got["tilt_Nm"] == float((zz * fn).sum())
+    assert got["yaw_Nm"] == float((-yy * fn).sum())
+    assert got["shear_y_N"] == float((ft * -np.cos(pb)[:, None]).sum())
+    # the shadow at the rotor plane's own distance is the default one, bit for bit
+    shadowed = Wind(mean_speed=U, hub_height=tb.hub_height, shear_exponent=0.0, tower_radius=1.5,
+                    tower_distance=3.0)
+    z_low = tb.hub_height - np.linspace(1.0, 20.0, 7)
+    y_low = np.linspace(-2.0, 2.0, 7)
+    np.testing.assert_array_equal(shadowed.velocity(0.0, y_low, z_low),
+                                  shadowed.velocity(0.0, y_low, z_low, np.full(7, 3.0)))
+    far = shadowed.velocity(0.0, y_low, z_low, np.full(7, 9.0))[0]
+    a2, x = 1.5**2, 9.0
+    np.testing.assert_allclose(far, U * (1 - a2 * (x * x - y_low**2) / (x * x + y_low**2)**2),
+                               rtol=1e-12)
 
 
 def test_a_run_in_openfasts_channels_and_units():

@@ -44,10 +44,11 @@ class Deck:
 
     Attributes
     ----------
-    tip_radius, hub_radius : m. blades : count. precone, shaft_tilt : rad (not modelled by
-    the rotor: its plane is normal to the wind). hub_inertia, generator_inertia : kg m^2
-    (the generator's about its own, high-speed shaft). rotor_inertia : kg m^2, the hub's and
-    the blades' (ElastoDyn's blade mass density integrated over the span about the shaft).
+    tip_radius, hub_radius : m. blades : count. precone, shaft_tilt : rad (ElastoDyn's
+    signs; the rotor is coned and the turbine's shaft tilted by them). hub_inertia,
+    generator_inertia : kg m^2 (the generator's about its own, high-speed shaft).
+    rotor_inertia : kg m^2, the hub's and the blades' (ElastoDyn's blade mass density
+    integrated over the span about the shaft).
     gear_ratio : generator per rotor speed.
     drivetrain_stiffness, drivetrain_damping : N m/rad, N m s/rad (the low-speed shaft's
     equivalent). rated_rotor_speed : rad/s (ElastoDyn's initial speed). generator_efficiency :

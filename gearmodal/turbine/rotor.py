@@ -35,7 +35,9 @@ torque ``Q`` (about the shaft, positive in the direction of rotation), in-plane 
 ``Fz`` (with the rotor's weight, ``-m g cos(tilt)``), tilt ``My`` and yaw ``Mz`` moments, the
 sums ``F = sum f``, ``M = sum p x f`` over the elements' forces ``f = f_n e_n + f_t e_t`` at
 their positions ``p``. The thrust is aerodynamic: the weight's component along a tilted shaft,
-``m g sin(tilt)``, is left to the main bearing. Blade ``b`` is at azimuth ``psi + 2 pi b / B``
+``m g sin(tilt)``, is left to the main bearing, and the weight acts at the rotor centre: the
+coned blades' centre of mass upwind of it (0.96 m on the 5 MW) and its tilt moment are left
+out. Blade ``b`` is at azimuth ``psi + 2 pi b / B``
 (0 = up); its element sits at ``y = -r cos(c) sin(psi_b)``, ``z = r cos(c) cos(psi_b)`` and
 moves along ``e_t = (0, -cos(psi_b), -sin(psi_b))``.
 """
@@ -186,7 +188,7 @@ class Rotor:
         x = np.broadcast_to(self.r_axial[None, :], fn.shape)
         return {
             "thrust_N": float(fx.sum()),
-            "torque_Nm": float((y * fz - z * fy).sum()),
+            "torque_Nm": float((ft * self.r_turn[None, :]).sum()),  # = sum (y fz - z fy)
             "shear_y_N": float(fy.sum()),
             "shear_z_N": float(fz.sum()) - self.mass * self.gravity * math.cos(tilt),
             "tilt_Nm": float((z * fx - x * fz).sum()),

@@ -81,8 +81,9 @@ class Turbine:
     speed. inertia : drivetrain
     inertia at the rotor, kg m^2. hub_height, front_bearing, rear_bearing : m.
     mounting_azimuth_deg : azimuth of planet 1 relative to blade 1 (deg). tilt_deg : shaft
-    tilt, the rotor end up (deg): the direction of gravity on the gearbox's bodies in a turbine
-    run (the gearbox model's own ``tilt_deg`` is replaced by it)."""
+    tilt, the rotor end up (deg): the rotor's inflow (:meth:`blade_wind`) and the direction of
+    gravity on the gearbox's bodies in a turbine run (the gearbox model's own ``tilt_deg`` is
+    replaced by it)."""
 
     rotor: Rotor
     generator: InductionGenerator | None
@@ -108,14 +109,22 @@ class Turbine:
         each (blades, n), for :meth:`Rotor.loads` (:mod:`.rotor`'s docstring). The shaft,
         tilted by ``tilt_deg`` (the rotor end up), has the axis ``x_s = (cos, 0, -sin)`` and
         the normal ``z_s = (sin, 0, cos)`` in the wind's axes; an element at ``(x, y, z)`` in
-        the shaft's axes stands ``z cos(tilt) - x sin(tilt)`` above the hub."""
+        the shaft's axes stands ``z cos(tilt) - x sin(tilt)`` above the hub and
+        ``x cos(tilt) + z sin(tilt)`` downwind of it, which its tower shadow takes (at least
+        just outside the tower)."""
         rot = self.rotor
         y, z, psib = rot.positions(psi)
         tau = math.radians(self.tilt_deg)
         ct, st = math.cos(tau), math.sin(tau)
         height = z + self.hub_height if tau == 0.0 else \
             self.hub_height + z * ct - rot.r_axial[None, :] * st
-        vel = wind.velocity(t, y, height)
+        if wind.tower_radius > 0 and (tau != 0.0 or rot.precone != 0.0):
+            # the tower shadow at each element's own distance upwind of the tower: the rotor
+            # plane's, less the element's downwind offset x cos(tilt) + z sin(tilt)
+            gap = wind.tower_distance - (rot.r_axial[None, :] * ct + z * st)
+            vel = wind.velocity(t, y, height, np.maximum(gap, 1.001 * wind.tower_radius))
+        else:
+            vel = wind.velocity(t, y, height)
         sp, cp = np.sin(psib)[:, None], np.cos(psib)[:, None]
         if tau == 0.0:
             ux, uz = vel[0], vel[2]
@@ -187,8 +196,8 @@ TURBINE_FILE = {
         Field("mounting_azimuth_deg", "number", "deg", default=0.0,
               doc="planet 1 relative to blade 1"),
         Field("tilt_deg", "number", "deg", low=-30.0, high=30.0, default=0.0,
-              doc="shaft tilt, rotor end up: the direction of gravity on the gearbox "
-                  "bodies")), "The turbine."), True),
+              doc="shaft tilt, rotor end up: the rotor's inflow and the direction of "
+                  "gravity on the gearbox bodies")), "The turbine."), True),
     "rotor": (Table("rotor", (
         Field("radius", "number", "m", low=0.0, low_open=True, default=REQUIRED,
               doc="tip radius"),

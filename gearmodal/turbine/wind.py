@@ -291,9 +291,12 @@ class Wind:
         return box
 
     # -- sampling --------------------------------------------------------------------------
-    def velocity(self, t: float, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+    def velocity(self, t: float, y: np.ndarray, z: np.ndarray,
+                 x: np.ndarray | None = None) -> np.ndarray:
         """Wind velocity (3, ...) = (u downwind, v lateral, w up) in m/s at time ``t`` and
-        points ``(y, z)`` (m; ``z`` above ground), including shear and tower shadow."""
+        points ``(y, z)`` (m; ``z`` above ground), including shear and tower shadow; ``x``:
+        each point's distance upwind of the tower's axis for the shadow (m; default
+        ``tower_distance``, the rotor plane's)."""
         y = np.asarray(y, dtype=float)
         z = np.asarray(z, dtype=float)
         if y.shape == z.shape:  # (the rotor's points every aerodynamic step)
@@ -302,6 +305,10 @@ class Wind:
             shape = np.broadcast_shapes(y.shape, z.shape)
             yf = np.ascontiguousarray(np.broadcast_to(y, shape)).ravel()
             zf = np.ascontiguousarray(np.broadcast_to(z, shape)).ravel()
+        if x is None:
+            xf = np.full(yf.shape, float(self.tower_distance))
+        else:
+            xf = np.ascontiguousarray(np.broadcast_to(np.asarray(x, dtype=float), shape)).ravel()
         if self.turbulent:
             tt, gy, gz, box = self._turbulence()
             if t > tt[-1] + 1e-9:
@@ -314,13 +321,12 @@ class Wind:
             box, k, w = np.zeros((2, 3, 2, 2)), 0, 0.0
         out = _sample(yf, zf, float(self.mean_speed), float(self.hub_height),
                       float(self.shear_exponent), self.turbulent, box, k, w, gy[0],
-                      gy[1] - gy[0], gz[0], gz[1] - gz[0], float(self.tower_radius),
-                      float(self.tower_distance))
+                      gy[1] - gy[0], gz[0], gz[1] - gz[0], float(self.tower_radius), xf)
         return out.reshape((3, *shape))
 
 
 @numba.njit(cache=True)
-def _sample(y, z, U, z_hub, alpha, turbulent, box, k, w, y0, dy, z0, dz, r_tower, x_tower):
+def _sample(y, z, U, z_hub, alpha, turbulent, box, k, w, y0, dy, z0, dz, r_tower, xt):
     """:meth:`Wind.velocity` at the points ``(y[i], z[i])``: power-law shear, the box
     frames ``k`` and ``k + 1`` blended by ``w`` and interpolated bilinearly (clipped to the
     grid), the potential-flow tower shadow below the hub (3, n)."""
@@ -344,6 +350,7 @@ def _sample(y, z, U, z_hub, alpha, turbulent, box, k, w, y0, dy, z0, dz, r_tower
                                + ay * az * box[f, c, iy + 1, iz + 1])
                 out[c, i] += v
         if r_tower > 0 and z[i] < z_hub:
+            x_tower = xt[i]
             r2 = x_tower * x_tower + y[i] * y[i]
             out[0, i] *= 1.0 - r_tower * r_tower * (x_tower * x_tower - y[i] * y[i]) / (r2 * r2)
     return out
