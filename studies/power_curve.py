@@ -74,11 +74,9 @@ def run(out, *, turbine: str = "nrel5mw", duration: float | None = None,
     pitch, tsr, cp = nrel5mw.cp_table()
     i, j = np.unravel_index(cp.argmax(), cp.shape)
     deck = nrel5mw.read_deck()
-    alpha, height = nrel5mw.TABLE_SHEAR  # the wind the table was made in
-    table_wind = gm.turbine.Wind(mean_speed=11.4, hub_height=height, shear_exponent=alpha,
-                                 tower_radius=0.0)
-    ours = nrel5mw.turbine(deck).power_coefficient(
-        table_wind, tsr[i] * 11.4 / deck.tip_radius, pitch[j])[0]
+    tb, table_wind = nrel5mw.table_conditions(deck)  # the turbine and wind of the table
+    alpha = table_wind.shear_exponent
+    ours = tb.power_coefficient(table_wind, tsr[i] * 11.4 / deck.tip_radius, pitch[j])[0]
     above = curve[curve.wind_speed_mps >= 16]
     write_study_report(out, "NREL 5 MW power curve with ROSCO", [
         f"The NREL 5 MW turbine from its OpenFAST deck, NREL's ROSCO controller in the loop, "

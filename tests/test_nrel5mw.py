@@ -23,7 +23,6 @@ import gearmodal as gm  # noqa: E402
 from gearmodal.turbine import nrel5mw  # noqa: E402
 from gearmodal.turbine.airfoil import Airfoil  # noqa: E402
 from gearmodal.turbine.rosco import discon_value  # noqa: E402
-from gearmodal.turbine.wind import Wind  # noqa: E402
 
 #: the blade's aerodynamic stations, m from the rotor centre (Jonkman et al. 2009, Table 2-1)
 RNODES = [2.8667, 5.6, 8.3333, 11.75, 15.85, 19.95, 24.05, 28.15, 32.25, 36.35, 40.45, 44.55,
@@ -137,14 +136,9 @@ def _operating_points(deck) -> list[tuple[int, int]]:
 
 
 def _table_conditions(deck, rot=None):
-    """The 5 MW turbine (its rotor, or ``rot``) and the wind NREL's table was made in:
-    11.4 m/s, shear exponent 0.2 at 89.56 m (:data:`nrel5mw.TABLE_SHEAR`)."""
-    alpha, height = nrel5mw.TABLE_SHEAR
-    tb = dataclasses.replace(nrel5mw.turbine(deck), hub_height=height)  # CCBlade's hub there
-    if rot is not None:
-        tb = dataclasses.replace(tb, rotor=rot)
-    return tb, Wind(mean_speed=11.4, hub_height=height, shear_exponent=alpha,
-                    tower_radius=0.0)
+    """:func:`nrel5mw.table_conditions`, the turbine's rotor replaced by ``rot``."""
+    tb, wind = nrel5mw.table_conditions(deck)
+    return (tb if rot is None else dataclasses.replace(tb, rotor=rot)), wind
 
 
 def _against_table(deck, rot=None):

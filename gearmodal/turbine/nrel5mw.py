@@ -18,7 +18,7 @@ deck's precone; :func:`turbine` tilts the shaft by the deck's tilt. :func:`cp_ta
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -222,6 +222,17 @@ def _performance_table(title: str, path=None):
 
 #: NREL's table's conditions (:func:`cp_table`): shear exponent, its reference height (m)
 TABLE_SHEAR = (0.2, 89.56)
+
+
+def table_conditions(deck: Deck | None = None) -> tuple[Turbine, Wind]:
+    """The 5 MW turbine and the wind NREL's table (:func:`cp_table`) was made in: 11.4 m/s,
+    shear exponent 0.2 about the hub at 89.56 m, where CCBlade had it (TowerHt + Twr2Shft;
+    :data:`TABLE_SHEAR`), no tower shadow. ``turbine.power_coefficient(wind, ...)`` then
+    compares with the table."""
+    alpha, height = TABLE_SHEAR
+    tb = replace(turbine(read_deck() if deck is None else deck), hub_height=height)
+    return tb, Wind(mean_speed=11.4, hub_height=height, shear_exponent=alpha,
+                    tower_radius=0.0)
 
 
 def calm(turb: Turbine, wind_speed: float) -> Wind:

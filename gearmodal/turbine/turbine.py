@@ -322,7 +322,8 @@ class TurbineResult:
                                 ("efficiency", efficiency, 0.0, 1.0)):
             if not (isinstance(v, (int, float)) and not isinstance(v, bool) and lo < v <= hi):
                 raise ModelError(name, f"= {v!r}: a number in ({lo:g}, {hi:g}]")
-        d = self.view(list(TURBINE_UNITS)[1:], max_rows=None)
+        d = self.view(list(dict.fromkeys([c for _, c, _ in OPENFAST_CHANNELS.values()]
+                                         + ["rotor_speed_rpm", "power_W"])), max_rows=None)
         out = pd.DataFrame(index=pd.Index(d.index.to_numpy(), name="Time"))
         units = {}
         for name, (unit, col, factor) in OPENFAST_CHANNELS.items():
