@@ -44,6 +44,7 @@ from .model.components import G_STANDARD
 from .model.dump import dump, dumps
 from .model.toml_io import load, loads
 from .precision import FidelityTable, fidelity
+from .rating import Rating, rate
 from .sharing import static_load_sharing
 from .static import Equilibrium, balance, equilibrium
 from .studies import sweep
@@ -60,4 +61,4 @@ __all__ = ["DOF_LEVELS", "Assembly", "Bearing", "Body", "CampbellResult", "Const
            "gear_pair",
            "lin_parker_stage", "load", "loads", "dump", "dumps", "modal", "parallel_stage",
            "planetary_stage", "register_element", "static_load_sharing", "G_STANDARD",
-           "sweep", "fidelity"]
+           "sweep", "fidelity", "Rating", "rate"]

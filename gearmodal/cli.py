@@ -2,7 +2,8 @@
 FILE.fmu`` (:mod:`gearmodal.fmu`), ``gearmodal simulate SCENE.toml``
 (a gearbox scene with loads, loads from an aeroelastic output file, or the turbine in wind
 with the gearbox: see :mod:`gearmodal.scene`), ``gearmodal study NAME --out DIR`` (the
-paper's studies in ``studies/``).
+paper's studies in ``studies/``), ``gearmodal rate MODEL.toml --out DIR`` (ISO 6336 and ISO 281
+ratings, :mod:`gearmodal.rating`).
 
 Input errors (:class:`gearmodal.ModelError`, missing files) are printed as one line without a
 traceback and the exit status is 2; a failed solve (:class:`gearmodal.SolveError`) exits with
@@ -130,6 +131,41 @@ def cmd_modal(args) -> int:
                 fmax_hz=args.fmax_hz)
     out = write_modal_report(res, args.out, summary=model.summary())
     print(f"wrote {out}/report.html")
+    return 0
+
+
+def cmd_rate(args) -> int:
+    from .model import Model
+    from .rating import rate
+
+    model = _load(args.model)
+    if not isinstance(model, Model):  # an elastic turbine: its gearbox
+        if getattr(model, "gearbox", None) is None:
+            raise ModelError(args.model, "has no gearbox model to rate (the deck's two-mass "
+                             "drivetrain has no gears)")
+        model = model.gearbox
+    k_gamma = args.k_gamma
+    if k_gamma is not None and k_gamma not in ("standard", "model"):
+        try:
+            k_gamma = float(k_gamma)
+        except ValueError:
+            raise ModelError("--k-gamma", f"= {args.k_gamma!r}: standard, model or a "
+                             "number") from None
+        if not 1.0 <= k_gamma <= 3.0:
+            raise ModelError("--k-gamma", f"= {k_gamma!r}: must lie in [1, 3]")
+    for name in ("torque", "life_h", "application_factor", "speed"):
+        x = getattr(args, name)
+        if x is not None and not (math.isfinite(x) and x > 0):
+            raise ModelError(f"--{name.replace('_', '-')}", f"= {x!r}: must be a number > 0")
+    r = rate(model, args.torque, speed_rpm=args.speed, life_h=args.life_h,
+             application_factor=args.application_factor, k_gamma=k_gamma)
+    out = r.save(args.out)
+    g = r.gears
+    low = g.loc[g[["S_H", "S_F"]].min(axis=1).idxmin()]
+    print(f"rated {len(g)} gears and {len(r.bearings)} bearings at "
+          f"{r.settings['input_torque_Nm']:.4g} N m: lowest S_H {g.S_H.min():.3f}, "
+          f"lowest S_F {g.S_F.min():.3f} (the lowest of both: {low.gear} in {low.mesh}); "
+          f"wrote {out}/index.html")
     return 0
 
 
@@ -548,6 +584,20 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with --reference follow: re-base every S seconds (default: at "
                         "every communication step)")
     f.set_defaults(func=cmd_fmu)
+    ra = sub.add_parser("rate", help="ISO 6336 gear and ISO 281 bearing ratings of a model "
+                                     "at its rated torque (the model's [rating] table)")
+    ra.add_argument("model", help="model file (TOML) with a [rating] table")
+    ra.add_argument("--out", required=True, type=_out_folder, help="output folder")
+    ra.add_argument("--torque", type=float, help="input torque, N m (default: the table's "
+                                                 "input_torque)")
+    ra.add_argument("--speed", type=float, help="input speed, rpm (default: rated)")
+    ra.add_argument("--life-h", type=float, dest="life_h", help="required life, h (default: "
+                                                                "the table's, 20 years)")
+    ra.add_argument("--application-factor", type=float, dest="application_factor",
+                    help="K_A (default: the table's)")
+    ra.add_argument("--k-gamma", dest="k_gamma", help="planets' K_gamma: standard (IEC "
+                    "61400-4), model (the static equilibrium's) or a number")
+    ra.set_defaults(func=cmd_rate)
     i = sub.add_parser("info", help="model summary and DOF names")
     i.add_argument("model")
     i.set_defaults(func=cmd_info)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from . import scene
 from .model import file_schema as fs
+from .model import rating_data
 from .model.bearing import Bearing
 from .model.components import Body, Frame, Gear, RigidBody
 from .model.dump import GROUPS_TABLE, MODEL_TABLE
@@ -62,7 +63,8 @@ def sections() -> list[tuple[str, str, list[Table]]]:
         ("Model files: the builder types", _BUILDER_TEXT,
          [fs.MODEL, fs.GEAR, fs.BODY, fs.CARRIER, fs.SHAFT, fs.SUPPORT, fs.PLANETARY,
           fs.PARALLEL, fs.PER_MESH, fs.GEAR_PAIR, fs.LIN_PARKER, fs.PER_MESH_ANGLE,
-          fs.LIN_PARKER_BODIES, fs.LIN_PARKER_CENTRAL]),
+          fs.LIN_PARKER_BODIES, fs.LIN_PARKER_CENTRAL, rating_data.RATING,
+          rating_data.GEAR_RATING, rating_data.BEARING_RATING]),
         ('Model files, component by component (type = "components")', _COMPONENT_TEXT,
          [MODEL_TABLE, Frame.SCHEMA, Gear.SCHEMA, RigidBody.SCHEMA, Body.SCHEMA, Mesh.SCHEMA,
           Bearing.SCHEMA, groups]),

@@ -192,7 +192,7 @@ class Scene:
         of where they are; what resumable stores key their runs by."""
 
 
-        parts = [dump_model(self.model), to_toml(self._document("", paths=False))]
+        parts = [dump_model(self.model, rating=False), to_toml(self._document("", paths=False))]
         if self.turbine is not None:
             parts.append(json.dumps(dataclasses.asdict(self.turbine), sort_keys=True,
                                     default=lambda o: o.tolist()))

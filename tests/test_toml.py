@@ -414,7 +414,7 @@ TOML_CASES = [
      r"^gear_pair\.pinion\.helix_angle: unknown key \(angles are given in degrees: "
      r"helix_angle_deg\)"),
     ("unknown-section", GEAR_PAIR_TOML, "[gear_pair.wheel]", "[wheel]",
-     r"^wheel: unknown section for type = 'gear_pair'; allowed: model, gear_pair$"),
+     r"^wheel: unknown section for type = 'gear_pair'; allowed: model, gear_pair, rating$"),
     ("ring-teeth", PLANETARY_TOML, "teeth = 99", "teeth = 98",
      r"^planetary_stage\.ring\.teeth = 98: ring teeth must equal sun \+ 2 \* planet "
      r"\(21 \+ 2 \* 39 = 99\), or give the stage's centre_distance \(profile-shifted "

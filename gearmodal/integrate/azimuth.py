@@ -61,7 +61,7 @@ def _fit_key(model, degree: int) -> str | None:
     """The fit's key: the SHA-256 of the model's text and the degree; None for a model that
     cannot be written as text (a user-written system: fitted every time)."""
     try:
-        text = dumps(model)
+        text = dumps(model, rating=False)
     except (ModelError, TypeError, ValueError, AttributeError, KeyError):
         return None
     return hashlib.sha256(f"{degree}\n{text}".encode()).hexdigest()

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
+from . import rating_data
 from .components import Body, Frame, Gear, RigidBody
 from .model import ELEMENT_KINDS, GROUND, Model
 from .schema import REQUIRED, Field, Table
@@ -60,10 +61,12 @@ def _arrays() -> tuple:
     return (("frames", Frame), ("bodies", None), *((c.TABLE, c) for c in ELEMENT_KINDS))
 
 
-def dumps(model: Model) -> str:
+def dumps(model: Model, rating: bool = True) -> str:
     """The model as TOML text of ``type = "components"`` (see the module docstring).
 
-    ``gm.loads(gm.dumps(m))`` assembles to exactly the same matrices as ``m``.
+    ``gm.loads(gm.dumps(m))`` assembles to exactly the same matrices as ``m``. ``rating``:
+    write the ratings' data (``model.rating``, the ``[rating]`` table) too; they change no
+    matrix, so the identities of runs leave them out (``rating=False``).
 
     Examples
     --------
@@ -93,6 +96,8 @@ def dumps(model: Model) -> str:
             doc[cls.TABLE] = [_write(e) for e in table.values()]
     if model.groups:
         doc["groups"] = {k: list(v) for k, v in model.groups.items()}
+    if rating and getattr(model, "rating", None):
+        doc["rating"] = rating_data.write(model.rating)
     return to_toml(doc)
 
 
@@ -186,9 +191,9 @@ def read_components(doc: dict, default_name: str | None = None) -> Model:
     """The :class:`Model` of a ``type = "components"`` document (parsed TOML); every error is a
     :class:`ModelError` whose field is the path in the document (``bodies[2].mass``)."""
     for key in doc:
-        if key not in ("model", *(a for a, _ in _arrays()), "groups"):
+        if key not in ("model", *(a for a, _ in _arrays()), "groups", "rating"):
             raise ModelError(key, "unknown section for type = 'components'; allowed: model, "
-                             + ", ".join(a for a, _ in _arrays()) + ", groups")
+                             + ", ".join(a for a, _ in _arrays()) + ", groups, rating")
     meta = MODEL_TABLE.read("model", doc["model"])
     model = Model(meta.get("name", default_name or "model"), input=meta.get("input"),
                   rated_speed_rpm=meta.get("rated_speed_rpm"),
@@ -233,6 +238,9 @@ def read_components(doc: dict, default_name: str | None = None) -> Model:
         model.check()
     except ModelError as e:
         raise _located(e, paths) from None
+    if "rating" in doc:
+        model.rating = rating_data.read("rating", doc["rating"])
+        rating_data.check_names(model.rating, model)
     return model
 
 

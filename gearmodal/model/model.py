@@ -86,6 +86,8 @@ class Model:
         self.groups: dict[str, list[str]] = {}
         self.output: str | None = None
         self.gear_ratio: float | None = None
+        #: the ratings' data (the file's ``[rating]`` table, :mod:`gearmodal.model.rating_data`)
+        self.rating: dict | None = None
 
     # -- building -------------------------------------------------------------------------
     def add(self, component):

@@ -138,7 +138,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import ModelError
-from . import builders
+from . import builders, rating_data
 from . import file_schema as fs
 from . import spec as sp
 from . import validate as v
@@ -531,9 +531,9 @@ def _build(doc: dict, default_name: str | None) -> Model:
     kind = meta["type"]
     sections = _SECTIONS[kind]
     for key in doc:
-        if key not in sections:
+        if key not in sections and key != "rating":
             raise _err(key, f"unknown section for type = {kind!r}; allowed: "
-                            + ", ".join(sections))
+                            + ", ".join([*sections, "rating"]))
     for key, required in sections.items():
         if required and key not in doc:
             raise _err(key, f"missing section [{key}] (required for type = {kind!r})")
@@ -560,7 +560,15 @@ def _build(doc: dict, default_name: str | None) -> Model:
                                                              meta.get("tilt_deg", 0.0))
     with _at("", ()):
         model.check()
+        _rating(doc, model)
     return model
+
+
+def _rating(doc: dict, model: Model) -> None:
+    """The optional ``[rating]`` table onto ``model.rating`` (checked against its names)."""
+    if "rating" in doc:
+        model.rating = rating_data.read("rating", doc["rating"])
+        rating_data.check_names(model.rating, model)
 
 
 def _speeds(meta: dict):

@@ -1,0 +1,164 @@
+"""The rating of a whole model (gearmodal.rating.gearbox) and its inputs, report and command."""
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import gearmodal as gm
+from gearmodal.cli import main
+
+NREL = "studies/models/nrel5mw.toml"
+
+
+@pytest.fixture(scope="module")
+def nrel():
+    return gm.load(NREL)
+
+
+@pytest.fixture(scope="module")
+def rated(nrel):
+    return gm.rate(nrel, gravity=False)
+
+
+def test_every_gear_of_the_three_stages_is_rated(rated):
+    g = rated.gears
+    assert set(g.gear) == {"stage1.sun", "stage1.planet", "stage1.ring", "stage2.sun",
+                           "stage2.planet", "stage2.ring", "stage3.gear", "stage3.pinion"}
+    assert len(g) == 10  # a planet in its sun mesh and in its ring mesh
+    assert np.all((g.S_H > 0.3) & (g.S_H < 10) & (g.S_F > 0.3) & (g.S_F < 10))
+
+
+def test_the_loads_are_the_torque_through_the_stages(nrel, rated):
+    """The pinion torque of each mesh is the input torque through the stage ratios: the sun's
+    torque shared by three planets (no gravity: equal sharing, the model's K_gamma 1)."""
+    g = rated.gears.set_index(["mesh", "member"])
+    t = 4.18e6
+    sun1 = t / (1 + 56 / 19)
+    # stage 1's sun-planet pinion is the planet (17 < 19 teeth): its torque is the sun's share
+    # times the planet's over the sun's base radius
+    r = nrel.bodies
+    tp = sun1 / 3 * r["stage1.planet1"].base_radius / r["stage1.sun"].base_radius
+    assert g.loc[("stage1.sun_planet", "pinion"), "torque_Nm"] == pytest.approx(tp, rel=1e-6)
+    sun2 = sun1 / (1 + 93 / 18)
+    assert g.loc[("stage2.sun_planet", "pinion"), "torque_Nm"] == pytest.approx(sun2 / 3,
+                                                                                 rel=1e-6)
+    pinion3 = sun2 * 24 / 95
+    assert g.loc[("stage3.mesh", "pinion"), "torque_Nm"] == pytest.approx(pinion3, rel=1e-6)
+    assert np.allclose(rated.gears.K_gamma_model, 1.0, atol=1e-6)
+    # IEC 61400-4's K_gamma for three planets on the planetary meshes, 1 on the parallel one
+    assert set(g.loc["stage1.sun_planet", "K_gamma"]) == {1.1}
+    assert set(g.loc["stage3.mesh", "K_gamma"]) == {1.0}
+
+
+def test_cycles_follow_the_kinematics(nrel, rated):
+    """A sun meets its three planets once each per revolution against the carrier; a planet
+    one mesh per revolution of its own; over 20 years at 12.1 rpm."""
+    g = rated.gears.set_index(["mesh", "gear"])
+    minutes = 175200.0 * 60.0
+    sun = nrel.bodies["stage1.sun"].speed_ratio - 1.0
+    assert g.loc[("stage1.sun_planet", "stage1.sun"), "cycles"] == pytest.approx(
+        abs(sun) * 12.1 * minutes * 3, rel=1e-12)
+    planet = nrel.bodies["stage1.planet1"].speed_ratio - 1.0
+    assert g.loc[("stage1.sun_planet", "stage1.planet"), "cycles"] == pytest.approx(
+        abs(planet) * 12.1 * minutes, rel=1e-12)
+    assert abs(planet) == pytest.approx(56 / 17, rel=1e-12)
+    assert g.loc[("stage1.ring_planet", "stage1.planet"), "Y_M"] == 0.7
+    assert g.loc[("stage1.sun_planet", "stage1.sun"), "Y_M"] == 1.0
+
+
+def test_operating_pressure_angles_are_the_models(nrel, rated):
+    """The profile shifts of the [rating] table give each mesh the operating pressure angle
+    the model's centre distances give (the ring's x with ISO 21771's sign)."""
+    g = rated.gears.drop_duplicates("mesh").set_index("mesh")
+    for mesh in ("stage1.sun_planet1", "stage1.ring_planet1", "stage2.ring_planet1",
+                 "stage3.mesh"):
+        group = mesh.rstrip("123") if mesh != "stage3.mesh" else mesh
+        want = math.degrees(nrel.meshes[mesh].pressure_angle)
+        assert g.loc[group, "alpha_wt_deg"] == pytest.approx(want, abs=0.01)
+
+
+def test_bearings_carry_the_mesh_forces(nrel):
+    r = gm.rate(nrel)
+    b = r.bearings.set_index("bearing")
+    assert len(b) == 10 and np.all(np.isfinite(b.L10m_h) & (b.L10m_h > 0))
+    # a planet's bearing (no gravity): the sun's and the ring's mesh forces F on it, each on
+    # its line of action at its operating pressure angle to the tangent, inward and outward
+    flat = gm.rate(nrel, gravity=False)
+    g = flat.gears.set_index(["mesh", "member"])
+    f = g.loc[("stage1.sun_planet", "pinion"), "torque_Nm"] / nrel.bodies[
+        "stage1.planet1"].base_radius
+    a1 = nrel.meshes["stage1.sun_planet1"].pressure_angle
+    a2 = nrel.meshes["stage1.ring_planet1"].pressure_angle
+    want = f * math.hypot(math.cos(a1) + math.cos(a2), math.sin(a1) - math.sin(a2))
+    loads = flat.bearings.set_index("bearing").loc[
+        [f"stage1.planet{i}_bearing" for i in (1, 2, 3)], "radial_load_N"]
+    assert np.allclose(loads, want, rtol=1e-6)
+    # gravity moves each planet's share (the carrier's azimuth 0), not the mean much
+    assert b.loc[[f"stage1.planet{i}_bearing" for i in (1, 2, 3)],
+                 "radial_load_N"].mean() == pytest.approx(want, rel=0.01)
+    # the planet bearing turns at the planet's speed against the carrier
+    assert b.loc["stage1.planet1_bearing", "speed_rpm"] == pytest.approx(12.1 * 56 / 17)
+
+
+def test_the_rating_table_round_trips_and_leaves_the_identity(nrel, tmp_path):
+    again = gm.loads(gm.dumps(nrel))
+    assert again.rating == nrel.rating
+    assert gm.dumps(nrel, rating=False) == gm.dumps(gm.loads(gm.dumps(nrel, rating=False)),
+                                                     rating=False)
+    assert "[rating]" not in gm.dumps(nrel, rating=False)
+
+
+@pytest.mark.parametrize("extra, field", [
+    ("[rating]\nlife = 3\n", "rating.life"),
+    ("[rating]\nk_gamma = 0.5\n", "rating.k_gamma"),
+    ("[rating.gears.nope]\nprofile_shift = 0.1\n", "rating.gears.nope"),
+    ("[rating.bearings.\"x*\"]\nC = 1e6\n", "rating.bearings.x*"),
+    ("[rating.bearings.bearing_b]\npitch_diameter = 0.1\n", "rating.bearings.bearing_b.C"),
+    ("[rating.gears.pinion]\nprofile_shift = 4\n", "rating.gears.pinion.profile_shift"),
+])
+def test_bad_rating_data_is_refused_by_name(extra, field):
+    text = open("studies/models/gear_pair.toml").read() + "\n" + extra
+    with pytest.raises(gm.ModelError) as e:
+        gm.loads(text)
+    assert e.value.field == field
+
+
+def test_a_model_without_its_data_says_what_is_missing():
+    m = gm.load("studies/models/600kw.toml")
+    with pytest.raises(gm.ModelError, match="input_torque"):
+        gm.rate(m)
+    r = gm.rate(m, 2.6e5)
+    assert len(r.gears) == 8 and r.bearings.empty
+    with pytest.raises(gm.ModelError, match="rated_speed_rpm"):
+        gm.rate(gm.load("studies/models/gear_pair.toml"), 100.0)
+    with pytest.raises(gm.ModelError, match="face_width"):
+        gm.rate(gm.load("studies/models/gear_pair.toml"), 100.0, speed_rpm=1000.0)
+
+
+def test_k_gamma_choices(nrel, rated):
+    model = gm.rate(nrel, k_gamma="model", gravity=False).gears
+    assert np.allclose(model.K_gamma, model.K_gamma_model)
+    planetary = rated.gears["mesh"].str.contains("planet").to_numpy()
+    # the equilibrium shares equally (K_gamma 1) where IEC 61400-4 assumes 1.1
+    assert np.all(model.S_H.to_numpy()[planetary] > rated.gears.S_H.to_numpy()[planetary])
+    assert np.allclose(model.S_H.to_numpy()[~planetary], rated.gears.S_H.to_numpy()[~planetary])
+
+
+def test_report_and_command(tmp_path, capsys):
+    assert main(["rate", NREL, "--out", str(tmp_path / "r")]) == 0
+    out = capsys.readouterr().out
+    assert "rated 10 gears and 10 bearings" in out
+    g = pd.read_csv(tmp_path / "r" / "gears.csv", comment="#")
+    b = pd.read_csv(tmp_path / "r" / "bearings.csv", comment="#")
+    assert {"S_H", "S_F", "sigma_H_MPa"} <= set(g.columns) and "L10m_h" in b.columns
+    assert (tmp_path / "r" / "index.html").read_text().count("<table") == 2
+    assert (tmp_path / "r" / "rating.png").stat().st_size > 10_000
+    r = subprocess.run([sys.executable, "-m", "gearmodal.cli", "rate",
+                        "studies/models/600kw.toml", "--out", str(tmp_path / "s")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "rating.input_torque" in r.stderr
+    assert main(["rate", NREL, "--out", str(tmp_path / "t"), "--k-gamma", "x"]) == 2
