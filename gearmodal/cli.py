@@ -157,8 +157,13 @@ def cmd_rate(args) -> int:
         x = getattr(args, name)
         if x is not None and not (math.isfinite(x) and x > 0):
             raise ModelError(f"--{name.replace('_', '-')}", f"= {x!r}: must be a number > 0")
+    run = None
+    if args.run is not None:
+        from .saved import load_run
+        run = load_run(args.run)
     r = rate(model, args.torque, speed_rpm=args.speed, life_h=args.life_h,
-             application_factor=args.application_factor, k_gamma=k_gamma)
+             application_factor=args.application_factor, k_gamma=k_gamma, result=run,
+             t_from=args.t_from)
     out = r.save(args.out)
     g = r.gears
     low = g.loc[g[["S_H", "S_F"]].min(axis=1).idxmin()]
@@ -166,6 +171,10 @@ def cmd_rate(args) -> int:
           f"{r.settings['input_torque_Nm']:.4g} N m: lowest S_H {g.S_H.min():.3f}, "
           f"lowest S_F {g.S_F.min():.3f} (the lowest of both: {low.gear} in {low.mesh}); "
           f"wrote {out}/index.html")
+    sp = r.spectrum
+    if sp is not None and len(sp) and "S_H_spectrum" in sp:
+        print(f"under the run's load spectrum: lowest S_H {sp.S_H_spectrum.min():.3f}, lowest "
+              f"S_F {sp.S_F_spectrum.min():.3f} (ISO 6336-6; the run stands for the life)")
     return 0
 
 
@@ -597,6 +606,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="K_A (default: the table's)")
     ra.add_argument("--k-gamma", dest="k_gamma", help="planets' K_gamma: standard (IEC "
                     "61400-4), model (the static equilibrium's) or a number")
+    ra.add_argument("--run", metavar="DIR", help="a saved run of this model (gearmodal "
+                    "simulate --out DIR): rate under its exact load spectrum too (ISO 6336-6)")
+    ra.add_argument("--t-from", type=float, dest="t_from", default=0.0, metavar="S",
+                    help="with --run: count the spectrum from this time on (default 0)")
     ra.set_defaults(func=cmd_rate)
     i = sub.add_parser("info", help="model summary and DOF names")
     i.add_argument("model")

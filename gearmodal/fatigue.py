@@ -391,7 +391,7 @@ def _basic_life(C: float, p: float, p_eq: float, revolutions: float, duration: f
 
 
 def level_spectrum(result, channels: list[str], *, t_from: float = 0.0,
-                   t_to: float | None = None) -> pd.DataFrame | None:
+                   t_to: float | None = None, edges: str = "table") -> pd.DataFrame | None:
     """The exact load duration and revolution distributions (LDD and LRD, F2) of the largest
     of ``channels`` from ``t_from`` to ``t_to`` (s; the run's end by default), from the run's
     exact level changes (:attr:`gearmodal.SimulationResult.level_changes`): between two
@@ -403,7 +403,11 @@ def level_spectrum(result, channels: list[str], *, t_from: float = 0.0,
     ``time_s``, ``revolutions`` (NaN for a model without an ``input``; exact where ``t_from``
     and ``t_to`` are on the peak bins' grid or the run's end); ``None`` when the run has no
     level changes (a method other than the exact one's Taylor propagator,
-    ``turning_points=False``)."""
+    ``turning_points=False``). ``edges``: ``"table"`` the bins of :data:`LEVELS` (the
+    lifetime tables': what lies above their top edge in their top bin), ``"run"`` the run's
+    own, :data:`RUN_LEVELS`."""
+    if edges not in ("table", "run"):
+        raise ModelError("edges", f"= {edges!r}: 'table' or 'run'")
     chunks = result.level_chunks()
     first = next(chunks, None)
     if first is None:
@@ -420,15 +424,24 @@ def level_spectrum(result, channels: list[str], *, t_from: float = 0.0,
     if len(kinds) != 1:
         raise ModelError("channels", "one kind of channel: mesh flanks or planet bearings' "
                          "radial forces (their levels differ)")
-    edges = LEVELS[kinds.pop()]
-    sweep = LevelSweep(channels, edges, t_from, t1)
+    kind = kinds.pop()
+    run = RUN_LEVELS[kind]
+    sweep = LevelSweep(channels, run, t_from, t1)
     try:
         for chunk in itertools.chain([first], chunks):
             sweep.feed(chunk)
     except Unsorted:  # a table written before its rows were sorted: swept whole
-        sweep = LevelSweep(channels, edges, t_from, t1)
+        sweep = LevelSweep(channels, run, t_from, t1)
         sweep.feed(pd.concat(list(result.level_chunks())).sort_index(kind="stable"))
-    return sweep.table()
+    table = sweep.table()
+    if edges == "run":
+        return table
+    coarse = LEVELS[kind]  # the run's first bins are LEVELS' own, the rest merged on top
+    nb = len(coarse) - 1
+    idx = np.minimum(np.arange(len(table)), nb - 1)
+    return pd.DataFrame({"level_low": coarse[:-1], "level_high": coarse[1:],
+                         "time_s": np.bincount(idx, table.time_s.to_numpy(), nb),
+                         "revolutions": np.bincount(idx, table.revolutions.to_numpy(), nb)})
 
 
 def equivalent_loads(result, p: float, *, t_from: float = 0.0) -> pd.DataFrame | None:
@@ -508,6 +521,14 @@ class UpperPercentile:
 LEVELS = {"rotor_torque_Nm": np.linspace(-2e5, 6e5, 81),
           "tooth_force_N": np.linspace(0.0, 4e5, 81),
           "planet_bearing_force_N": np.linspace(0.0, 6e5, 81)}
+
+
+#: the level edges a run records its level changes on (:mod:`gearmodal.integrate.turns`):
+#: the bins of :data:`LEVELS` continued at their width to 2 MN (tooth forces) and 3 MN (planet
+#: bearings), so that a multi-megawatt gearbox's spectrum is not clipped at 400 kN; the
+#: lifetime tables take them merged into LEVELS' bins (above their top edge: the top bin)
+RUN_LEVELS = {"tooth_force_N": np.linspace(0.0, 2e6, 401),
+              "planet_bearing_force_N": np.linspace(0.0, 3e6, 401)}
 
 
 def drivetrain_fatigue(result, *, bearing_C: float, planet_spin: float, t_skip: float = 5.0,

@@ -86,7 +86,7 @@ class LevelSweep:
         wrong = np.flatnonzero(self.edges[b[ok]] != low[ok])
         if len(wrong):
             raise ModelError("level_changes", f"{self.channels[c[ok][wrong[0]]]!r}: its "
-                             "levels are not those of fatigue.LEVELS (a run of another "
+                             "levels are not those of fatigue.RUN_LEVELS (a run of another "
                              "gearmodal?)")
         r = chunk["input_revolutions"].to_numpy(dtype=float)[keep]
         rows = tuple(np.concatenate([w, x]) for w, x in zip(self.wait, (t, c, b, r), strict=True))

@@ -27,7 +27,10 @@ and every run's damage scaled from its duration to its bin's hours, averaged ove
 (the lifetime DEL at N_ref = 1e7 cycles); the planet bearing's equivalent load over its
 lifetime revolutions ``P_eq = (sum w N_run P_eq,run^p / sum w N_run)^(1/p)`` and
 ``L10h = (C / P_eq)^p 10^6 / (revolutions per hour)`` (ISO 281); the LDD (hours) and LRD
-(rotor revolutions) of the rotor torque, tooth and planet-bearing force summed likewise.
+(rotor revolutions) of the rotor torque, tooth and planet-bearing force summed likewise; and
+the first stage's gears rated under that lifetime LRD of the largest tooth force (ISO 6336-6,
+:func:`ratings`): the lowest pitting and tooth-root safety factors ``S_H_stage1``,
+``S_F_stage1``, with their clearance/reference ratios and intervals as the others'.
 
 The gearboxes' lifetime ratios (lifetime_ratios.csv) come with a 95 % interval over the seeds:
 the lifetime (D3) of each seed alone (its runs in every bin), both gearboxes on that seed, and
@@ -82,7 +85,10 @@ T_SKIP = 5.0
 SEEDS = 6
 #: the lifetime quantities whose ratio between the gearboxes gets an interval over the seeds
 RATIOS = ("del_tooth_N", "del_planet_bearing_N", "del_rotor_torque_Nm", "planet_bearing_peq_N",
-          "l10_planet_bearing_h")
+          "l10_planet_bearing_h", "S_H_stage1", "S_F_stage1")
+#: the mesh groups rated under the lifetime spectrum of the largest tooth force (ISO 6336-6,
+#: gearmodal.rating.rate_spectrum): the first stage's, whose flanks that spectrum counts
+RATED = ("stage1.sun_planet", "stage1.ring_planet")
 #: rotor speed of the connected start (rpm): synchronous 1800 rpm / 81.49
 SPEED0_RPM = 22.1
 VARIANTS = {"reference": {}, "clearance": {"model.stages.0.carrier_bearing": CLEARANCE}}
@@ -159,7 +165,33 @@ def lifetime(runs: pd.DataFrame, spectra: dict, wind_class: str = "II") -> tuple
     life = life.drop(columns="damage_tooth")
     spec = (pd.concat(parts).groupby(["variant", "quantity", "level_low", "level_high"],
                                      sort=False)[["hours", "revolutions"]].sum().reset_index())
+    for variant in life.index:
+        for k, v in ratings(spec[spec.variant == variant], life.loc[variant, "hours"]).items():
+            life.loc[variant, k] = v
     return life, spec
+
+
+@functools.lru_cache(maxsize=1)
+def _rated_model():
+    from gearmodal.scene import load_scene
+
+    return load_scene(SCENE).model
+
+
+def ratings(spec: pd.DataFrame, hours: float) -> dict:
+    """The lowest ISO 6336-6 safety factors of the first stage's gears (pitting ``S_H_stage1``,
+    tooth root ``S_F_stage1``) under a variant's lifetime spectrum of the largest tooth force
+    (every flank of the stage: conservative for each), over ``hours``; NaN without one. The
+    clearance only changes a bearing, so both gearboxes are rated on the reference model's
+    gears (gearmodal.rating.rate_spectrum: K_A = K_gamma = K_v = 1, the loads' own
+    dynamics)."""
+    from gearmodal.rating import rate_spectrum
+
+    s = spec[spec.quantity == "tooth_force_N"]
+    if s.empty or not (s.revolutions > 0).any():
+        return {"S_H_stage1": math.nan, "S_F_stage1": math.nan}
+    r = rate_spectrum(_rated_model(), s, meshes=list(RATED), hours=hours)
+    return {"S_H_stage1": float(r.S_H_spectrum.min()), "S_F_stage1": float(r.S_F_spectrum.min())}
 
 
 def lifetime_ratios(runs: pd.DataFrame, spectra: dict, wind_class: str = "II",
@@ -183,6 +215,10 @@ def lifetime_ratios(runs: pd.DataFrame, spectra: dict, wind_class: str = "II",
     for q in RATIOS:
         a = [r[q] for r in per["clearance"]]
         b = [r[q] for r in per["reference"]]
+        if not np.all(np.isfinite(np.concatenate([a, b]))):  # no spectrum to rate on
+            rows.append({"quantity": q, "pooled": math.nan, "ratio": math.nan,
+                         "low": math.nan, "high": math.nan, "n": len(a), "differs": False})
+            continue
         pr = paired_ratio(a, b, level)
         rows.append({"quantity": q,
                      "pooled": float(pooled.loc["clearance", q] / pooled.loc["reference", q]),

@@ -175,3 +175,39 @@ def test_study_fatigue_on_a_dask_local_cluster(tmp_path):
     # the clearance's rattle raises the tooth DEL on both seeds; the rotor torque's the same
     assert r.loc["del_tooth_N", "ratio"] > 1.05
     assert r.loc["del_rotor_torque_Nm", "ratio"] == pytest.approx(1.0, abs=0.02)
+
+
+def test_the_first_stage_rated_under_the_lifetime_tooth_force_spectrum():
+    """The lifetime LRD of the largest tooth force rates the first stage's gears (ISO 6336-6,
+    gearmodal.rating.rate_spectrum): a spectrum on one level rates as the steady load at that
+    level's upper force over the same cycles (K_A = K_gamma = K_v = 1), gear by gear; a stronger
+    spectrum rates lower; a table without that spectrum rates nothing (NaN)."""
+    from gearmodal.rating import rate, rate_spectrum
+
+    edges = np.linspace(0.0, 4e5, 81)
+    revs = np.zeros(80)
+    revs[20] = 4e7  # 20 years of a rotor at ~22 rpm, all at 100-105 kN
+    base = pd.DataFrame({"variant": "a", "quantity": "tooth_force_N", "level_low": edges[:-1],
+                         "level_high": edges[1:], "hours": 1.0, "revolutions": revs})
+    one = fatigue.ratings(base, 175200.0)
+    model = fatigue._rated_model()
+    per_gear = rate_spectrum(model, base, meshes=list(fatigue.RATED), hours=175200.0)
+    assert one["S_H_stage1"] == pytest.approx(per_gear.S_H_spectrum.min(), rel=1e-12)
+    # the steady load of 105 kN on every first-stage flank: the rotor torque that puts it on
+    # each of the three sun-planet meshes (F the normal force, its transverse part
+    # F cos(beta_b)), T = F cos(beta_b) N r_b,sun (1 + z_ring / z_sun)
+    sun, ring = model.bodies["stage1.sun"], model.bodies["stage1.ring"]
+    torque = (105e3 * math.cos(sun.base_helix_angle) * 3 * sun.base_radius
+              * (1 + ring.teeth / sun.teeth))
+    rpm = 4e7 / (175200.0 * 60.0)
+    steady = rate(model, torque, speed_rpm=rpm, life_h=175200.0, application_factor=1.0,
+                  k_gamma=1.0, dynamic_factor=1.0, gravity=False).gears
+    steady = steady[steady["mesh"].isin(fatigue.RATED)]
+    assert np.allclose(per_gear.S_H_spectrum, steady.S_H, rtol=1e-6)
+    assert np.allclose(per_gear.S_F_spectrum, steady.S_F, rtol=1e-6)
+    stronger = base.assign(level_low=base.level_low * 1.25, level_high=base.level_high * 1.25)
+    two = fatigue.ratings(stronger, 175200.0)
+    assert two["S_H_stage1"] < one["S_H_stage1"] and two["S_F_stage1"] < one["S_F_stage1"]
+    assert 1.0 < one["S_H_stage1"] < 10.0 and 1.0 < one["S_F_stage1"] < 10.0
+    nothing = fatigue.ratings(base.assign(quantity="x"), 175200.0)
+    assert all(math.isnan(v) for v in nothing.values())

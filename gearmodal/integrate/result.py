@@ -143,7 +143,7 @@ class SimulationResult:
     level_changes : the exact level changes (exact method, Taylor propagator) of the mesh
         flanks' and the planet bearings' radial forces (:mod:`gearmodal.integrate.turns`):
         when each one's force enters another level bin (the edges of
-        :data:`gearmodal.fatigue.LEVELS`), located on the pieces' series as crossings are;
+        :data:`gearmodal.fatigue.RUN_LEVELS`), located on the pieces' series as crossings are;
         index ``time`` (s), columns ``channel``, ``bin`` (the bin from that time on),
         ``level_low_N``, ``level_high_N``, ``input_revolutions`` (the model input's
         revolutions from the start), each channel's first row the run's start; rows of channel

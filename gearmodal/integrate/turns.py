@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..fatigue import LEVELS
+from ..fatigue import RUN_LEVELS
 from ..levelsweep import MARK
 from .taylor import LEVEL0
 
@@ -93,9 +93,9 @@ class TurnPoints:
         self.levels: dict[str, np.ndarray] = {}
         for ch, label in enumerate(labels):
             if contacts.kind[int(self.TCH[ch, 0])] == "mesh":
-                self.levels[label] = LEVELS["tooth_force_N"]
+                self.levels[label] = RUN_LEVELS["tooth_force_N"]
         for label in radial:
-            self.levels[label] = LEVELS["planet_bearing_force_N"]
+            self.levels[label] = RUN_LEVELS["planet_bearing_force_N"]
         width = max((len(e) for e in self.levels.values()), default=0)
         # per channel (taylor.LEVEL0): last point's time and value, direction, has one, jump
         # flag, level bin (-1: none yet), number of level edges; in the first row only, the

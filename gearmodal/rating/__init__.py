@@ -8,9 +8,10 @@ equilibrium, the speeds and tooth load cycles from its kinematics) and its repor
 shared basics; the application (the command line) imports it, never the other way round.
 """
 
-from .gearbox import Rating, rate
+from .gearbox import Rating, rate, rate_spectrum
 from .iso281 import a_iso, modified_life, rated_viscosity
 from .iso6336 import GearSpec, PairRating, rate_pair
 
 __all__ = ["GearSpec", "PairRating", "Rating", "a_iso", "modified_life", "rate", "rate_pair",
+           "rate_spectrum",
            "rated_viscosity"]

@@ -30,6 +30,7 @@ from ..errors import ModelError
 from ..model import rating_data
 from ..model.components import Gear
 from ..static import balance, equilibrium
+from . import runs
 from .iso281 import modified_life, operating_viscosity
 from .iso6336 import GearSpec, rate_pair
 
@@ -42,11 +43,13 @@ G = 9.81
 class Rating:
     """A model's ratings: ``gears`` (one row per gear of each mesh group: safety factors S_H and
     S_F, stresses and every factor) and ``bearings`` (one row per bearing: load, speed,
-    L10m_h); ``settings`` the inputs that made them."""
+    L10m_h); ``settings`` the inputs that made them; ``spectrum`` the ratings under a run's
+    load spectrum (per gear and flank), None without a run."""
 
     gears: pd.DataFrame
     bearings: pd.DataFrame
     settings: dict = field(default_factory=dict)
+    spectrum: pd.DataFrame | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """The gears' table."""
@@ -142,13 +145,22 @@ def _k_gamma(choice, n_planets: int, model_value: float) -> float:
 
 def rate(model, torque: float | None = None, *, speed_rpm: float | None = None,
          life_h: float | None = None, application_factor: float | None = None,
-         k_gamma=None, gravity: bool = True) -> Rating:
+         k_gamma=None, dynamic_factor: float | None = None, gravity: bool = True,
+         result=None, t_from: float = 0.0) -> Rating:
     """ISO 6336 and ISO 281 ratings of ``model`` at a steady ``torque`` (N m at its input;
     default the ``[rating]`` table's ``input_torque``) and speed (rpm; default the model's rated
     speed), over ``life_h`` hours (default the table's, 20 years).
 
-    ``application_factor`` (K_A) and ``k_gamma`` override the table's. ``gravity``: the
+    ``application_factor`` (K_A) and ``k_gamma`` override the table's; ``dynamic_factor`` a
+    K_v for every mesh instead of ISO 6336-1's method B (e.g. 1 where a dynamic model's loads
+    are given, or the peaks of a run over its static loads). ``gravity``: the
     weights in the loads where the model has a gravity load (the bearings' loads).
+
+    With ``result`` (a run of this model: :func:`gearmodal.simulate`, a turbine run) the rating
+    adds ISO 6336-6's under the run's exact load spectrum from ``t_from`` (s) on, the run
+    standing for the whole life (:mod:`gearmodal.rating.runs`): ``Rating.spectrum`` (per gear
+    and flank: damages and equivalent safety factors ``S_H_spectrum``, ``S_F_spectrum``) and
+    the planet bearings' lives from their exact equivalent loads (``L10m_h_spectrum``).
 
     Examples
     --------
@@ -174,68 +186,135 @@ def rate(model, torque: float | None = None, *, speed_rpm: float | None = None,
     k_a = data["application_factor"] if application_factor is None else application_factor
     kg_choice = data["k_gamma"] if k_gamma is None else k_gamma
     loads = _loads(model, torque, gravity)
-    eq = equilibrium(model, loads)
+    eq = equilibrium(model, loads, speed_rpm=speed)  # the centrifugal loads in
     c = eq.contacts
     force = c.groupby("element")["force_N"].sum()
-    planets_of = {}
-    for m in model.meshes.values():
-        if m.planet:
-            planets_of.setdefault(m.stage, set()).add(m.planet)
-    roles: dict[str, set] = {}
-    for m in model.meshes.values():
-        for g in (m.gear_a, m.gear_b):
-            roles.setdefault(g, set()).add(m.role or m.name)
-    rows = []
-    for group, names in _groups(model).items():
-        m0 = model.meshes[names[0]]
-        a, b = model.bodies[m0.gear_a], model.bodies[m0.gear_b]
-        if not (isinstance(a, Gear) and isinstance(b, Gear)):
-            continue
+    rows, spectrum = [], []
+    sim = runs.simulation_of(result) if result is not None else None
+    for pair in _pairs(model, data):
+        names, (sp, sw) = pair["meshes"], pair["specs"]
         f = np.array([abs(float(force.get(n, 0.0))) for n in names])
         worst = names[int(np.argmax(f))]
-        n_pl = len(planets_of.get(m0.stage, ())) if m0.planet else 0
+        n_pl = pair["planets"]
         kg_model = float(f.max() / f.mean()) if f.mean() > 0 else 1.0
         kg = _k_gamma(kg_choice, n_pl, kg_model) if n_pl else 1.0
-        mw = model.meshes[worst]
-        ga, gb = mw.gear_a, mw.gear_b
-        A, B = model.bodies[ga], model.bodies[gb]
-        # the pinion: the external gear with fewer teeth
-        if A.internal or (not B.internal and B.teeth <= A.teeth):
-            pin, whl = gb, ga
-        else:
-            pin, whl = ga, gb
-        P, W = model.bodies[pin], model.bodies[whl]
-        sp = _spec(model, pin, data, len(roles[pin]) > 1)
-        sw = _spec(model, whl, data, len(roles[whl]) > 1)
-        beta_b = P.base_helix_angle
-        torque_p = float(f.mean()) * math.cos(beta_b) * P.base_radius  # per mesh, mean
-        n_p = _speed(model, pin) * speed
-        n_w = _speed(model, whl) * speed
-        count = {g: sum(1 for n in names if g in (model.meshes[n].gear_a,
-                                                  model.meshes[n].gear_b))
-                 for g in (pin, whl)}
-        cyc = (abs(n_p) * 60.0 * life * count[pin], abs(n_w) * 60.0 * life * count[whl])
-        centre = float(np.linalg.norm(np.subtract(P.position, W.position)[:2]))
-        m_red = _reduced_mass(model, pin, whl, count, sp, sw)
-        r = rate_pair(sp, sw, centre, torque_p, n_p, cycles=cyc, application_factor=k_a,
-                      k_gamma=kg, accuracy_grade=data["accuracy_grade"],
+        torque_p = float(f.mean()) * pair["force_to_torque"]  # per mesh, the group's mean
+        n_p, n_w = (x * speed for x in pair["speed_ratio"])
+        cyc = tuple(abs(n) * 60.0 * life * k for n, k in zip((n_p, n_w), pair["count"],
+                                                            strict=True))
+        r = rate_pair(sp, sw, pair["centre"], torque_p, n_p, cycles=cyc,
+                      application_factor=k_a, k_gamma=kg,
+                      accuracy_grade=data["accuracy_grade"],
                       lubricant_viscosity_40=data["lubricant_viscosity_40"],
                       tip_relief=data["tip_relief"], long_life=data["long_life"],
-                      reduced_mass=m_red)
-        for name, g in ((pin, r.gears[0]), (whl, r.gears[1])):
-            label = _collapsed(name, m0.stage) if m0.planet else name
-            rows.append({"mesh": group, "gear": label, "member": "pinion" if name == pin
-                         else "wheel", "worst_mesh": worst, "S_H": g["S_H"], "S_F": g["S_F"],
-                         **{k: v for k, v in g.items() if k not in ("S_H", "S_F")},
+                      reduced_mass=pair["reduced_mass"], dynamic_factor=dynamic_factor)
+        if sim is not None:
+            spectrum += runs.spectrum_rows(sim, pair, names, life_h=life, t_from=t_from,
+                                           data=data)
+        for k, g in enumerate(r.gears):
+            rows.append({"mesh": pair["group"], "gear": pair["labels"][k],
+                         "member": ("pinion", "wheel")[k], "worst_mesh": worst,
+                         "S_H": g["S_H"], "S_F": g["S_F"],
+                         **{x: v for x, v in g.items() if x not in ("S_H", "S_F")},
                          **r.pair, "K_gamma_model": kg_model})
     gears = pd.DataFrame(rows)
     bearings = _bearings(model, eq, data, speed, life)
+    if sim is not None and len(bearings):
+        rated = [(n, _lookup_bearing(data, n)) for n in bearings.bearing]
+        extra = pd.DataFrame(runs.bearing_rows(sim, model, data, t_from=t_from, life_h=life,
+                                               bearings=rated))
+        if len(extra):
+            bearings = bearings.merge(extra, on="bearing", how="left")
     settings = {"model": model.name, "input_torque_Nm": float(torque), "speed_rpm": speed,
                 "life_h": life, "application_factor": k_a, "k_gamma": kg_choice,
                 "gravity": "gravity" in loads, "loads": loads,
                 "standards": "ISO 6336-1:2006 (K_v B, K_Hbeta C, K_Halpha B), ISO 6336-2:2019, "
                              "ISO 6336-3:2019 (method B), ISO 1328-1:1995, ISO 281:2007"}
-    return Rating(gears, bearings, settings)
+    if sim is not None:
+        settings["run"] = {"t_from_s": t_from, "t_end_s": sim.time_span()[1],
+                           "factors": "K_A = K_gamma = K_v = 1 (the dynamics in the run's "
+                                      "loads), the standard's K_Hbeta, K_Halpha"}
+    return Rating(gears, bearings, settings,
+                  pd.DataFrame(spectrum) if sim is not None else None)
+
+
+def _lookup_bearing(data: dict, name: str) -> dict:
+    for pattern, spec in data["bearings"].items():
+        if fnmatch.fnmatch(name, pattern):
+            return spec
+    raise KeyError(name)
+
+
+def _pairs(model, data: dict):
+    """Each mesh group's pair as the ratings need it, from the model alone: its meshes, pinion
+    and wheel (the external gear with fewer teeth is the pinion), their ISO 6336 specs, labels
+    (a stage's planets as one), centre distance, reduced mass, the factor from a flank force
+    to the pinion's torque, speeds against their frame over the input's, load cycles per
+    revolution (meshes of the group each gear is in) and the stage's number of planets."""
+    planets_of: dict[str, set] = {}
+    roles: dict[str, set] = {}
+    for m in model.meshes.values():
+        if m.planet:
+            planets_of.setdefault(m.stage, set()).add(m.planet)
+        for g in (m.gear_a, m.gear_b):
+            roles.setdefault(g, set()).add(m.role or m.name)
+    for group, names in _groups(model).items():
+        m0 = model.meshes[names[0]]
+        A, B = model.bodies[m0.gear_a], model.bodies[m0.gear_b]
+        if not (isinstance(A, Gear) and isinstance(B, Gear)):
+            continue
+        if A.internal or (not B.internal and B.teeth <= A.teeth):
+            pin, whl = m0.gear_b, m0.gear_a
+        else:
+            pin, whl = m0.gear_a, m0.gear_b
+        P, W = model.bodies[pin], model.bodies[whl]
+        sp = _spec(model, pin, data, len(roles[pin]) > 1)
+        sw = _spec(model, whl, data, len(roles[whl]) > 1)
+        count = {g: sum(1 for n in names if g in (model.meshes[n].gear_a,
+                                                  model.meshes[n].gear_b))
+                 for g in (pin, whl)}
+        yield {"group": group, "meshes": names, "names": (pin, whl),
+               "labels": [_collapsed(x, m0.stage) if m0.planet else x for x in (pin, whl)],
+               "specs": (sp, sw),
+               "centre": float(np.linalg.norm(np.subtract(P.position, W.position)[:2])),
+               "reduced_mass": _reduced_mass(model, pin, whl, count, sp, sw),
+               "force_to_torque": math.cos(P.base_helix_angle) * P.base_radius,
+               "speed_ratio": (_speed(model, pin), _speed(model, whl)),
+               "count": (count[pin], count[whl]),
+               "planets": len(planets_of.get(m0.stage, ())) if m0.planet else 0}
+
+
+def rate_spectrum(model, spectrum: pd.DataFrame, *, meshes: list[str] | None = None,
+                  hours: float | None = None, flank: str = "front") -> pd.DataFrame:
+    """ISO 6336-6 ratings of mesh groups under a lifetime load spectrum of their flank force:
+    ``spectrum`` with ``level_low``, ``level_high`` (N, the contact force on a flank, as the
+    model's mesh forces and a run's force columns give it) and ``revolutions`` (the model
+    input's, over the whole life), e.g. a fatigue study's lifetime load revolution
+    distribution of the largest tooth force. ``meshes``: the groups to rate
+    (``"stage1.sun_planet"``...; default every group), each with the same spectrum;
+    ``hours`` the life the spectrum stands for (its input's mean speed, for Z_v; default the
+    ``[rating]`` table's life). One row per gear: damages and equivalent safety factors
+    (:mod:`gearmodal.rating.spectrum`), K_A = K_gamma = K_v = 1 (the dynamics in the loads)."""
+    data = model.rating if model.rating is not None else rating_data.defaults()
+    for col in ("level_low", "level_high", "revolutions"):
+        if col not in spectrum:
+            raise ModelError("spectrum", f"has no column {col!r} (level_low, level_high, "
+                             "revolutions)")
+    pairs = {p["group"]: p for p in _pairs(model, data)}
+    chosen = list(pairs) if meshes is None else list(meshes)
+    for g in chosen:
+        if g not in pairs:
+            raise ModelError("meshes", f"{g!r}: no such mesh group; groups: "
+                             + ", ".join(pairs))
+    life_h = data["life_h"] if hours is None else hours
+    spec = spectrum.assign(time_s=1.0)  # every bin counted (the flank's top: the last used)
+    used = spectrum[spectrum.revolutions > 0]
+    top = float(used.level_high.max()) if len(used) else 0.0
+    mean_rpm = float(spectrum.revolutions.sum()) / (life_h * 60.0)
+    rows = []
+    for g in chosen:
+        rows += runs.rate_flank(spec, pairs[g], flank, 1.0, mean_rpm, data, top)
+    return pd.DataFrame(rows)
 
 
 def _collapsed(name: str, stage: str) -> str:

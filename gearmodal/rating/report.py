@@ -63,7 +63,10 @@ def write_rating(rating, directory) -> Path:
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     head = "# " + json.dumps(rating.settings, default=str) + "\n"
-    for name, df in (("gears.csv", rating.gears), ("bearings.csv", rating.bearings)):
+    tables = [("gears.csv", rating.gears), ("bearings.csv", rating.bearings)]
+    if rating.spectrum is not None:
+        tables.append(("spectrum.csv", rating.spectrum))
+    for name, df in tables:
         (out / name).write_text(head + df.to_csv(index=False))
     fig = plot_rating(rating)
     fig.savefig(out / "rating.png", dpi=130)
@@ -86,7 +89,14 @@ def write_rating(rating, directory) -> Path:
         b = rating.bearings[[c for c in BEARING_COLUMNS if c in rating.bearings.columns]]
         body += ["<h2>Bearings (ISO 281 modified life)</h2>",
                  _table(b, highlight=b["L10m_over_required"] < 1.0)]
-    body.append("<p>Every factor of every gear: gears.csv; bearings.csv.</p>")
+    if rating.spectrum is not None and len(rating.spectrum):
+        sp = rating.spectrum
+        body += ["<h2>Under the run's load spectrum (ISO 6336-6, Palmgren-Miner)</h2>",
+                 f"<p>{html.escape(str(s.get('run', '')))}</p>",
+                 _table(sp, highlight=(sp.get("S_H_spectrum", 2.0) < 1.0)
+                        | (sp.get("S_F_spectrum", 2.0) < 1.0))]
+    body.append("<p>Every factor of every gear: gears.csv; bearings.csv"
+                + ("; spectrum.csv" if rating.spectrum is not None else "") + ".</p>")
     title = html.escape(f"rating {s.get('model', '')}")
     (out / "index.html").write_text(
         f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{title}</title>"

@@ -173,3 +173,19 @@ def test_iso_tr_6336_30_example_1_pinion_as_drivetrain_python():
     r = rate_pair(g1, g2, 0.5, 9000.0, 360.0, cycles=(n1, n1 * 17 / 103),
                   accuracy_grade=5, tip_relief=70e-6)
     assert r.gears[0]["S_H"] == pytest.approx(1.08047178, rel=5e-4)
+
+
+def test_miner_on_a_constant_spectrum_is_the_life_factor():
+    """ISO 6336-6 on one load level: the factor that makes the damage 1 is the life factor's
+    permissible stress over the stress, Z_NT(N) sigma_ref / sigma, on every segment."""
+    from gearmodal.rating import spectrum as sp
+    for n in (3e5, 2e7, 4e8, 9e9, 3e10):
+        s = sp.equivalent_safety([800.0], [n], 1000.0, "pitting")
+        assert s == pytest.approx(iso6336.life_factor_pitting(n) * 1000.0 / 800.0, rel=1e-9)
+        s = sp.equivalent_safety([300.0], [n], 1000.0, "bending")
+        assert s == pytest.approx(iso6336.life_factor_bending(n) * 1000.0 / 300.0, rel=1e-9)
+    assert sp.damage([1700.0], [1.0], 1000.0, "pitting") == math.inf  # above the static limit
+    assert sp.damage([900.0], [1e12], 1000.0, "pitting", optimum=True) == 0.0
+    # two levels: Miner's sum
+    d = sp.damage([1200.0, 1000.0], [1e6, 2e7], 1000.0, "pitting")
+    assert d == pytest.approx(1e6 / (5e7 * 1.2 ** (-1 / 0.0756)) + 2e7 / 5e7, rel=1e-12)
