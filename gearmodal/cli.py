@@ -137,7 +137,20 @@ def cmd_modal(args) -> int:
 def cmd_rate(args) -> int:
     from .model import Model
     from .rating import rate
+    from .rating.study import is_study
 
+    if is_study(args.model):  # a fatigue study's output: its lifetime spectra
+        from .rating.report import write_study_rating
+        from .rating.study import rate_study
+
+        table, settings = rate_study(args.model)
+        out = write_study_rating(table, settings, args.out)
+        low = table.groupby("variant", sort=False)[["S_H_spectrum", "S_F_spectrum"]].min()
+        for v, row in low.iterrows():
+            print(f"{v}: lowest S_H {row.S_H_spectrum:.3f}, lowest S_F {row.S_F_spectrum:.3f} "
+                  "under its lifetime spectrum (first stage, ISO 6336-6)")
+        print(f"wrote {out}/index.html")
+        return 0
     model = _load(args.model)
     if not isinstance(model, Model):  # an elastic turbine: its gearbox
         if getattr(model, "gearbox", None) is None:
@@ -595,7 +608,8 @@ def build_parser() -> argparse.ArgumentParser:
     f.set_defaults(func=cmd_fmu)
     ra = sub.add_parser("rate", help="ISO 6336 gear and ISO 281 bearing ratings of a model "
                                      "at its rated torque (the model's [rating] table)")
-    ra.add_argument("model", help="model file (TOML) with a [rating] table")
+    ra.add_argument("model", help="model file (TOML) with a [rating] table, or a fatigue "
+                    "study's output folder (gearmodal study fatigue --out DIR)")
     ra.add_argument("--out", required=True, type=_out_folder, help="output folder")
     ra.add_argument("--torque", type=float, help="input torque, N m (default: the table's "
                                                  "input_torque)")

@@ -209,3 +209,27 @@ def test_a_run_rated_from_the_command_line(nrel, steady_run, tmp_path, capsys):
     assert "under the run's load spectrum" in capsys.readouterr().out
     sp = pd.read_csv(tmp_path / "r" / "spectrum.csv", comment="#")
     assert len(sp) == 10 and np.all(sp.S_H_spectrum > 1.0)
+
+
+def test_a_fatigue_studys_output_is_rated(tmp_path, capsys):
+    """`gearmodal rate STUDY_DIR`: the recorded 600 kW fatigue study's lifetime spectra rate
+    the first stage per gearbox; double contact's clearance lowers every safety factor."""
+    import json
+    import shutil
+
+    study = tmp_path / "fatigue"
+    study.mkdir()
+    shutil.copy("studies/results/fatigue/spectra.csv", study / "spectra.csv")
+    (study / "study.json").write_text(json.dumps(
+        {"study": "fatigue", "scene": "studies/scenes/600kw_turbine_10ms.toml"}))
+    assert main(["rate", str(study), "--out", str(tmp_path / "r")]) == 0
+    assert "clearance: lowest S_H" in capsys.readouterr().out
+    t = pd.read_csv(tmp_path / "r" / "ratings.csv", comment="#")
+    assert set(t.variant) == {"reference", "clearance"} and set(t["mesh"]) == {
+        "stage1.sun_planet", "stage1.ring_planet"}
+    ref = t[t.variant == "reference"].set_index(["mesh", "member"])
+    cl = t[t.variant == "clearance"].set_index(["mesh", "member"])
+    assert np.all(cl.S_H_spectrum < ref.S_H_spectrum) and np.all(cl.S_F_spectrum
+                                                                 < ref.S_F_spectrum)
+    (study / "study.json").write_text(json.dumps({"scene": "nowhere.toml"}))
+    assert main(["rate", str(study), "--out", str(tmp_path / "s")]) == 2

@@ -111,3 +111,46 @@ def _table(df, highlight) -> str:
     marks = list(highlight)
     return head + "".join(("<tr class='low'>\n" if marks[k] else "<tr>\n") + r
                           for k, r in enumerate(rows))
+
+
+def write_study_rating(table, settings: dict, directory) -> Path:
+    """A fatigue study's ratings (:func:`gearmodal.rating.study.rate_study`): ``ratings.csv``,
+    ``rating.png`` (S_H and S_F per gear and variant) and ``index.html``."""
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "ratings.csv").write_text("# " + json.dumps(settings, default=str) + "\n"
+                                     + table.to_csv(index=False))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    variants = list(dict.fromkeys(table.variant))
+    first = table[table.variant == variants[0]]
+    labels = [f"{m.split('.')[-1]}: {g.split('.')[-1]}"
+              for m, g in zip(first["mesh"], first["gear"], strict=True)]
+    x = np.arange(len(first))
+    w = 0.8 / max(len(variants), 1)
+    for ax, col, name in ((axes[0], "S_H_spectrum", "S_H (pitting)"),
+                          (axes[1], "S_F_spectrum", "S_F (tooth root)")):
+        for k, v in enumerate(variants):
+            ax.bar(x + (k - (len(variants) - 1) / 2) * w, table[table.variant == v][col], w,
+                   label=v)
+        ax.axhline(1.0, color="k", lw=0.8)
+        ax.set_xticks(x, labels, rotation=30, ha="right", fontsize=8)
+        ax.set_ylabel(name + ", lifetime spectrum")
+        ax.legend()
+    fig.tight_layout()
+    fig.savefig(out / "rating.png", dpi=130)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    plt.close(fig)
+    png = base64.b64encode(buf.getvalue()).decode()
+    title = html.escape(f"rating of {settings.get('study', '')}")
+    body = [f"<h1>Ratings under the lifetime spectra: {html.escape(settings.get('study', ''))}"
+            "</h1>",
+            f"<p>Scene {html.escape(str(settings.get('scene')))}; hours "
+            f"{html.escape(str(settings.get('hours')))}; {html.escape(settings['standards'])}."
+            "</p>",
+            f"<img alt='rating' src='data:image/png;base64,{png}'>",
+            _table(table, highlight=(table.S_H_spectrum < 1.0) | (table.S_F_spectrum < 1.0))]
+    (out / "index.html").write_text(
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{title}</title>"
+        f"<style>{_CSS}</style></head><body>" + "\n".join(body) + "</body></html>")
+    return out
