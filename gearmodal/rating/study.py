@@ -5,9 +5,10 @@ A fatigue study (``gearmodal study fatigue --out DIR``) writes ``spectra.csv``: 
 (the gearboxes) the lifetime load revolution distribution of the largest tooth force of the
 first planetary stage's flanks (:func:`gearmodal.fatigue.drivetrain_fatigue`) and the hours
 they stand for, and ``study.json`` (or its store's ``sweep.json``), which names the scene the
-runs were made of (a path as given, else relative to the working folder or to the study). Each variant's spectrum rates the first stage's mesh groups (every flank of the stage in
-it: conservative for each); the variants differ in bearings only, so they are rated on the
-scene's gears.
+runs were made of (a path as given, else relative to the working folder or to the study).
+Each variant's spectrum rates the first stage's mesh groups (every flank of the stage in it:
+conservative for each); the variants differ in bearings only, so they are rated on the scene's
+gears.
 """
 
 from __future__ import annotations
