@@ -202,6 +202,14 @@ def test_a_steady_spectrum_rates_as_the_steady_load(nrel, steady_run):
     assert b.drop(planets).L10m_h_spectrum.isna().all()  # their forces are not tracked
 
 
+def test_a_run_of_another_model_is_refused(nrel):
+    pair = gm.load("studies/models/gear_pair.toml")
+    sim = gm.simulate(pair, t_end=0.01, dt=1e-3, loads={"pinion.torque": 10.0,
+                                                        "wheel.torque": -20.0})
+    with pytest.raises(gm.ModelError, match="another model"):
+        gm.rate(nrel, result=sim)
+
+
 def test_a_run_rated_from_the_command_line(nrel, steady_run, tmp_path, capsys):
     steady_run.save(tmp_path / "run")
     assert main(["rate", NREL, "--out", str(tmp_path / "r"), "--run",

@@ -217,6 +217,9 @@ def rate(model, torque: float | None = None, *, speed_rpm: float | None = None,
                          "S_H": g["S_H"], "S_F": g["S_F"],
                          **{x: v for x, v in g.items() if x not in ("S_H", "S_F")},
                          **r.pair, "K_gamma_model": kg_model})
+    if sim is not None and not spectrum:
+        raise ModelError("result", "has no force of this model's mesh flanks (a run of another "
+                         "model?)")
     gears = pd.DataFrame(rows)
     bearings = _bearings(model, eq, data, speed, life)
     if sim is not None and len(bearings):
