@@ -159,7 +159,9 @@ def rate(model, torque: float | None = None, *, speed_rpm: float | None = None,
     With ``result`` (a run of this model: :func:`gearmodal.simulate`, a turbine run) the rating
     adds ISO 6336-6's under the run's exact load spectrum from ``t_from`` (s) on, the run
     standing for the whole life (:mod:`gearmodal.rating.runs`): ``Rating.spectrum`` (per gear
-    and flank: damages and equivalent safety factors ``S_H_spectrum``, ``S_F_spectrum``) and
+    and flank: damages and equivalent safety factors ``S_H_spectrum``, ``S_F_spectrum``, and
+    ``peak_over_steady``, the run's largest flank force over the steady rating's largest
+    mesh force: what the dynamics and double contact add to the standard's K factors) and
     the planet bearings' lives from their exact equivalent loads (``L10m_h_spectrum``).
 
     Examples
@@ -209,8 +211,11 @@ def rate(model, torque: float | None = None, *, speed_rpm: float | None = None,
                       tip_relief=data["tip_relief"], long_life=data["long_life"],
                       reduced_mass=pair["reduced_mass"], dynamic_factor=dynamic_factor)
         if sim is not None:
-            spectrum += runs.spectrum_rows(sim, pair, names, life_h=life, t_from=t_from,
-                                           data=data)
+            new = runs.spectrum_rows(sim, pair, names, life_h=life, t_from=t_from, data=data)
+            for row in new:  # the run's dynamic peak against the steady rating's load
+                row["peak_over_steady"] = row["peak_force_N"] / float(f.max()) if f.max() > 0 \
+                    else math.nan
+            spectrum += new
         for k, g in enumerate(r.gears):
             rows.append({"mesh": pair["group"], "gear": pair["labels"][k],
                          "member": ("pinion", "wheel")[k], "worst_mesh": worst,
