@@ -52,7 +52,9 @@ bins (6, 12, 18 m/s), one seed, 60 s runs. On gm.sweep: any executor (a Dask clu
 from __future__ import annotations
 
 import functools
+import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -292,6 +294,9 @@ def run(out, *, quick: bool = False, seed: int = 1, seeds: int | None = None,
         life.loc["clearance / reference"] = life.loc["clearance"] / life.loc["reference"]
     life.to_csv(out / "lifetime.csv")
     spec.to_csv(out / "spectra.csv", index=False)
+    # what `gearmodal rate DIR` needs to rate the set: the scene, relative to this folder
+    (out / "study.json").write_text(json.dumps(
+        {"study": "fatigue", "scene": os.path.relpath(SCENE, out.resolve())}, indent=1))
     ratios = None
     if n_seeds >= 2 and {"reference", "clearance"} <= set(runs.variant):
         ratios = lifetime_ratios(runs, spectra, wind_class)
