@@ -344,3 +344,25 @@ def test_turbine_run_does_not_depend_on_how_the_gearbox_is_called(t_end, start, 
         assert np.abs(a - b).max() < tol * (scale or np.abs(a).max()), name
     la, lb = one.turbine.loads.to_numpy(float), chopped.turbine.loads.to_numpy(float)
     assert (np.abs(la - lb).max(axis=0) / (np.abs(la).max(axis=0) + 1e-300)).max() < 1e-12
+
+
+def test_the_low_speed_shafts_torque_in_openfasts_channels(parts, cut_in_run):
+    """``DrivetrainResult.openfast``: the turbine's OpenFAST channels and ``LSShftTq`` (kN-m),
+    the main shaft element's torque. Against the rotor's own balance (independent of the
+    gearbox's forces): the shaft carries the aerodynamic torque less what accelerates the
+    rotor, ``T_shaft = T_aero - J_rotor d(omega)/dt``, on the turbine's rows after cut-in."""
+    tb, gb = parts
+    coupled, _ = cut_in_run
+    of = coupled.openfast(gear_ratio=tb.gear_ratio)
+    assert of.attrs["units"]["LSShftTq"] == "kN-m" and "GenPwr" in of
+    late = of[of.index > coupled.cut_in_time + 0.5]
+    t = late.index.to_numpy()
+    omega = late.RotSpeed.to_numpy() * math.pi / 30.0
+    j_rotor = gb.bodies["rotor"].inertia
+    balance = late.RtAeroMxh.to_numpy() - j_rotor * np.gradient(omega, t)
+    shaft = late.LSShftTq.to_numpy() * 1e3
+    assert np.mean(shaft) > 0  # the rotor drives the gearbox
+    assert np.mean(shaft) == pytest.approx(np.mean(balance), rel=0.01)
+    assert np.abs(shaft - balance).max() < 0.05 * np.abs(balance).max()
+    with pytest.raises(gm.ModelError, match="^shaft = 'nope'"):
+        coupled.openfast(gear_ratio=tb.gear_ratio, shaft="nope")

@@ -12,6 +12,8 @@ import gearmodal as gm
 from gearmodal.cli import main
 
 NREL = "studies/models/nrel5mw.toml"
+#: the steady run's input torque, N m
+STEADY = 1.5e6
 
 
 @pytest.fixture(scope="module")
@@ -168,9 +170,10 @@ def test_report_and_command(tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def steady_run(nrel):
-    """2 s of the 5 MW gearbox at its rated torque and speed from the static equilibrium (no
-    gravity): every flank force constant within a bin of the run's level table."""
-    loads = gm.balance(nrel, {"rotor.torque": 4.18e6}, on="generator.torque")
+    """2 s of the 5 MW gearbox at 1.5 MN m (its first stage's flanks at 316 kN, under the
+    level table's 400 kN) and its rated speed from the static equilibrium (no gravity): every
+    flank force constant within a bin of the run's level table."""
+    loads = gm.balance(nrel, {"rotor.torque": STEADY}, on="generator.torque")
     q0 = gm.equilibrium(nrel, loads, speed_rpm=12.1).q
     return gm.simulate(nrel, t_end=2.0, dt=1e-3, loads=loads, speed_rpm=12.1, q0=q0)
 
@@ -178,11 +181,11 @@ def steady_run(nrel):
 def test_a_steady_spectrum_rates_as_the_steady_load(nrel, steady_run):
     """Under a constant load the spectrum's equivalent safety factors are the steady rating's
     with the same factors (K_A = K_gamma = K_v = 1) at the same cycles, within the bin: the
-    spectrum takes a bin's upper edge (at most 5 kN above a 277-880 kN force: its square root
+    spectrum takes a bin's upper edge (at most 5 kN above a 100-316 kN force: its square root
     for S_H, itself for S_F); the planet bearings' lives from the exact equivalent load are
     the steady ones."""
-    r = gm.rate(nrel, result=steady_run, gravity=False)
-    steady = gm.rate(nrel, application_factor=1.0, k_gamma=1.0, dynamic_factor=1.0,
+    r = gm.rate(nrel, STEADY, result=steady_run, gravity=False)
+    steady = gm.rate(nrel, STEADY, application_factor=1.0, k_gamma=1.0, dynamic_factor=1.0,
                      gravity=False)
     sp = r.spectrum.set_index(["mesh", "member"])
     st = steady.gears.set_index(["mesh", "member"])
@@ -204,6 +207,16 @@ def test_a_steady_spectrum_rates_as_the_steady_load(nrel, steady_run):
     assert b.drop(planets).L10m_h_spectrum.isna().all()  # their forces are not tracked
 
 
+def test_a_clipped_spectrum_is_refused(nrel):
+    """At the rated 4.18 MN m the first stage's flanks carry 880 kN, beyond the run's level
+    table (400 kN): the spectrum would be clipped, so the rating refuses it by name."""
+    loads = gm.balance(nrel, {"rotor.torque": 4.18e6}, on="generator.torque")
+    q0 = gm.equilibrium(nrel, loads, speed_rpm=12.1).q
+    sim = gm.simulate(nrel, t_end=0.2, dt=1e-3, loads=loads, speed_rpm=12.1, q0=q0)
+    with pytest.raises(gm.ModelError, match="clipped"):
+        gm.rate(nrel, result=sim)
+
+
 def test_a_run_of_another_model_is_refused(nrel):
     pair = gm.load("studies/models/gear_pair.toml")
     sim = gm.simulate(pair, t_end=0.01, dt=1e-3, loads={"pinion.torque": 10.0,
@@ -215,7 +228,7 @@ def test_a_run_of_another_model_is_refused(nrel):
 def test_a_run_rated_from_the_command_line(nrel, steady_run, tmp_path, capsys):
     steady_run.save(tmp_path / "run")
     assert main(["rate", NREL, "--out", str(tmp_path / "r"), "--run",
-                 str(tmp_path / "run")]) == 0
+                 str(tmp_path / "run"), "--torque", str(STEADY)]) == 0
     assert "under the run's load spectrum" in capsys.readouterr().out
     sp = pd.read_csv(tmp_path / "r" / "spectrum.csv", comment="#")
     assert len(sp) == 10 and np.all(sp.S_H_spectrum > 1.0)

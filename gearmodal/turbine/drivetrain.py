@@ -125,6 +125,26 @@ class DrivetrainResult:
         """The turbine loads at the aerodynamic rate, their units in ``attrs["units"]``."""
         return self.turbine.to_frame()
 
+    def openfast(self, gear_ratio: float, efficiency: float = 1.0,
+                 shaft: str = "main_shaft") -> pd.DataFrame:
+        """:meth:`TurbineResult.openfast` (OpenFAST's channel names and units) with
+        ``LSShftTq`` kN-m, the low-speed shaft's structural torque: the gearbox model's
+        ``shaft`` element (the torsional spring and damper from the rotor into the gearbox) at
+        the turbine's times (rows the gearbox's output holds, or linear between them),
+        positive as the rotor drives the gearbox, as OpenFAST's."""
+        out = self.turbine.openfast(gear_ratio, efficiency)
+        col = f"{shaft}.theta"
+        columns = self.gearbox.force_columns()
+        if col not in columns:
+            shafts = sorted({c.rsplit(".", 1)[0] for c in columns if c.endswith(".theta")})
+            raise ModelError("shaft", f"= {shaft!r}: no torsional element of that name in the "
+                             "gearbox's forces; torsional elements: " + ", ".join(shafts))
+        f = self.gearbox.forces[col]
+        t = out.index.to_numpy()
+        out["LSShftTq"] = np.interp(t, f.index.to_numpy(dtype=float), f.to_numpy()) * 1e-3
+        out.attrs["units"] = {**out.attrs["units"], "LSShftTq": "kN-m"}
+        return out
+
     def plot(self):
         """Rotor speed, power and the planet-1 tooth forces against time; returns the Figure."""
         import matplotlib.pyplot as plt

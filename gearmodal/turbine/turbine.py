@@ -315,9 +315,9 @@ class TurbineResult:
         ``BldPitch1`` deg, ``GenSpeed`` rpm (the rotor's times ``gear_ratio``), ``GenTq``
         kN-m (on the generator shaft), ``GenPwr`` kW (electrical: the shaft power times
         ``efficiency``, ServoDyn's ``GenEff``), ``RtAeroFxh`` N and ``RtAeroMxh`` N-m (the
-        rotor's aerodynamic thrust and torque, AeroDyn's). Indexed by ``Time`` (s). Not
-        offered: ``LSShftTq`` (the shaft's structural torque; a coupled run's gearbox gives
-        the shaft element's force)."""
+        rotor's aerodynamic thrust and torque, AeroDyn's). Indexed by ``Time`` (s). The shaft's
+        structural torque ``LSShftTq`` needs the gearbox: a coupled run's
+        :meth:`gearmodal.turbine.DrivetrainResult.openfast`."""
         for name, v, lo, hi in (("gear_ratio", gear_ratio, 0.0, 1e4),
                                 ("efficiency", efficiency, 0.0, 1.0)):
             if not (isinstance(v, (int, float)) and not isinstance(v, bool) and lo < v <= hi):
