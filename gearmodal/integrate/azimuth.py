@@ -38,8 +38,12 @@ CHECK_RTOL = 1e-10
 _FIELDS = ("M", "C", "K", "G", "K_cent", "K_geom", "f_cent", "B")
 #: fits kept per process, by the model's text (:func:`gearmodal.dumps`, whose model assembles
 #: to exactly the same matrices) and the degree: a study's seeds and a test's runs of one
-#: gearbox fit it once (2.2 s for the 5 MW gearbox's 86 assemblies)
-FITS_KEPT = 8
+#: gearbox would fit it once (2.2 s for the 5 MW gearbox's 86 assemblies). Off (0) for now:
+#: with it on, runs compared across processes (the FMU against the Stepper, a Dask sweep
+#: against the process pool, whose forked workers inherit the fits) differed at rounding
+#: level in some clean-clone CI runs; the suspicion has not been confirmed (CHANGELOG,
+#: 2026-12-08), so the cache stays off until it is
+FITS_KEPT = 0
 _FITS: OrderedDict[str, dict] = OrderedDict()
 
 
@@ -74,7 +78,7 @@ class AzimuthAssembler:
 
     def __init__(self, model, degree: int = DEGREE):
         key = _fit_key(model, degree)
-        kept = _FITS.get(key) if key is not None else None
+        kept = _FITS.get(key) if key is not None and FITS_KEPT > 0 else None
         if kept is not None:  # the same model fitted before in this process: a copy of it
             _FITS.move_to_end(key)
             self.__dict__.update(copy.deepcopy(kept))
@@ -92,7 +96,7 @@ class AzimuthAssembler:
         self.exact = all(
             np.allclose(got[k], v, rtol=0, atol=CHECK_RTOL * max(np.abs(v).max(initial=0), 1e-30))
             for k, v in _arrays(check, waves=True).items())
-        if key is not None:
+        if key is not None and FITS_KEPT > 0:
             _FITS[key] = copy.deepcopy({k: v for k, v in self.__dict__.items() if k != "model"})
             while len(_FITS) > FITS_KEPT:
                 _FITS.popitem(last=False)
