@@ -526,8 +526,8 @@ LEVELS = {"rotor_torque_Nm": np.linspace(-2e5, 6e5, 81),
 #: the level edges a run records its level changes on (:mod:`gearmodal.integrate.turns`),
 #: those of :data:`LEVELS` (a run's spectrum above 400 kN on a tooth, 600 kN on a planet
 #: bearing is clipped into the top bin, which the ratings refuse to rate on; widening them to
-#: a multi-megawatt gearbox's forces is open: with 401 edges the dask and FMU comparisons of
-#: the suite differed at rounding level in CI, a cause not yet found); ``edges="run"`` of
+#: a multi-megawatt gearbox's forces is open: tried with 401 edges and reverted on a CI
+#: suspicion that proved unrelated, CHANGELOG 2026-12-08); ``edges="run"`` of
 #: :func:`level_spectrum` gives them, the lifetime tables ``LEVELS``' own
 RUN_LEVELS = {"tooth_force_N": LEVELS["tooth_force_N"],
               "planet_bearing_force_N": LEVELS["planet_bearing_force_N"]}
