@@ -228,7 +228,8 @@ def rate(model, torque: float | None = None, *, speed_rpm: float | None = None,
     gears = pd.DataFrame(rows)
     bearings = _bearings(model, eq, data, speed, life)
     if sim is not None and len(bearings):
-        rated = [(n, _lookup_bearing(data, n)) for n in bearings.bearing]
+        rated = [(n, data["bearings"][p]) for n, p in zip(bearings.bearing, bearings.pattern,
+                                                           strict=True)]
         extra = pd.DataFrame(runs.bearing_rows(sim, model, data, t_from=t_from, life_h=life,
                                                bearings=rated))
         if len(extra):
@@ -244,13 +245,6 @@ def rate(model, torque: float | None = None, *, speed_rpm: float | None = None,
                                       "loads), the standard's K_Hbeta, K_Halpha"}
     return Rating(gears, bearings, settings,
                   pd.DataFrame(spectrum) if sim is not None else None)
-
-
-def _lookup_bearing(data: dict, name: str) -> dict:
-    for pattern, spec in data["bearings"].items():
-        if fnmatch.fnmatch(name, pattern):
-            return spec
-    raise KeyError(name)
 
 
 def _pairs(model, data: dict):
@@ -315,13 +309,12 @@ def rate_spectrum(model, spectrum: pd.DataFrame, *, meshes: list[str] | None = N
             raise ModelError("meshes", f"{g!r}: no such mesh group; groups: "
                              + ", ".join(pairs))
     life_h = data["life_h"] if hours is None else hours
-    spec = spectrum.assign(time_s=1.0)  # every bin counted (the flank's top: the last used)
     used = spectrum[spectrum.revolutions > 0]
     top = float(used.level_high.max()) if len(used) else 0.0
     mean_rpm = float(spectrum.revolutions.sum()) / (life_h * 60.0)
     rows = []
     for g in chosen:
-        rows += runs.rate_flank(spec, pairs[g], flank, 1.0, mean_rpm, data, top)
+        rows += runs.rate_flank(spectrum, pairs[g], flank, 1.0, mean_rpm, data, top)
     return pd.DataFrame(rows)
 
 
@@ -379,7 +372,7 @@ def _bearings(model, eq, data: dict, speed: float, life: float) -> pd.DataFrame:
                                   pitch_diameter=spec["pitch_diameter"], kind=spec["kind"],
                                   contamination=data["contamination"], viscosity=nu,
                                   reliability=data["reliability"])
-            rows.append({"bearing": name, "label": spec.get("label", ""),
+            rows.append({"bearing": name, "pattern": pattern, "label": spec.get("label", ""),
                          "radial_load_N": radial, "speed_rpm": n, "C_N": spec["C"],
                          "C_u_N": cu, "viscosity_mm2_s": nu, **life_,
                          "L10m_over_required": life_["L10m_h"] / life})
